@@ -1,0 +1,46 @@
+#pragma once
+// Conversions between LCM messages and core structs. Conversions from LCM validate array
+// sizes against their counts and return an error string (empty = ok) instead of trusting them.
+#include <string>
+
+#include "geometry/features.hpp"
+#include "laser/laser_scan.hpp"
+#include "odometry/odometry_reading.hpp"
+#include "sonar/sonar_targets.hpp"
+#include "polarslam/features_t.hpp"
+#include "polarslam/laser_scan_t.hpp"
+#include "polarslam/odometry_t.hpp"
+#include "polarslam/pose_t.hpp"
+#include "polarslam/sonar_targets_t.hpp"
+
+namespace polarslam {
+
+polarslam::laser_scan_t toLcm(const LaserScan& scan);
+std::string fromLcm(const polarslam::laser_scan_t& msg, LaserScan& out);
+
+polarslam::odometry_t toLcm(const OdometryReading& odo);
+std::string fromLcm(const polarslam::odometry_t& msg, OdometryReading& out);
+
+polarslam::sonar_targets_t toLcm(const SonarScan& scan);
+std::string fromLcm(const polarslam::sonar_targets_t& msg, SonarScan& out);
+
+polarslam::pose_t toLcm(const PoseStamped& pose, const std::string& frame, int64_t seq = 0);
+std::string fromLcm(const polarslam::pose_t& msg, PoseStamped& out);
+
+polarslam::features_t toLcm(const FeatureSet& features);
+std::string fromLcm(const polarslam::features_t& msg, FeatureSet& out);
+
+template <int N>
+void copyMatrix(const Eigen::Matrix<double, N, N>& m, double* out) {
+  for (int r = 0; r < N; ++r)
+    for (int c = 0; c < N; ++c) out[r * N + c] = m(r, c);
+}
+template <int N>
+Eigen::Matrix<double, N, N> readMatrix(const double* in) {
+  Eigen::Matrix<double, N, N> m;
+  for (int r = 0; r < N; ++r)
+    for (int c = 0; c < N; ++c) m(r, c) = in[r * N + c];
+  return m;
+}
+
+}  // namespace polarslam

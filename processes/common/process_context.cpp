@@ -1,0 +1,128 @@
+#include "common/process_context.hpp"
+
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <stdexcept>
+
+#include "polarslam/process_status_t.hpp"
+
+namespace polarslam {
+namespace {
+
+std::atomic<bool> g_stop{false};
+void onSignal(int) { g_stop = true; }
+
+double residentMegabytes() {
+  std::ifstream statm("/proc/self/statm");
+  long pages_total = 0, pages_resident = 0;
+  statm >> pages_total >> pages_resident;
+  return static_cast<double>(pages_resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / 1e6;
+}
+
+std::string hostName() {
+  char buf[256] = {0};
+  gethostname(buf, sizeof(buf) - 1);
+  return buf;
+}
+
+}  // namespace
+
+int64_t nowUtime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+bool SequenceTracker::accept(const std::string& channel, int64_t seq) {
+  auto it = last_.find(channel);
+  if (it == last_.end()) {
+    last_[channel] = seq;
+    return true;
+  }
+  if (seq <= it->second) return false;
+  dropped_ += seq - it->second - 1;
+  it->second = seq;
+  return true;
+}
+
+std::string resolveLcmUrl(const std::string& option) {
+  if (!option.empty()) return option;
+  if (const char* env = std::getenv("LCM_DEFAULT_URL"); env && *env) return env;
+  return "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+}
+
+ProcessContext::ProcessContext(std::string name, const std::string& lcm_url)
+    : name_(std::move(name)), lcm_(std::make_unique<lcm::LCM>(resolveLcmUrl(lcm_url))) {
+  if (!lcm_->good())
+    throw std::runtime_error("cannot open LCM at '" + resolveLcmUrl(lcm_url) +
+                             "' (no multicast route? try: ip route add 224.0.0.0/4 dev lo)");
+}
+
+void ProcessContext::reject(const std::string& kind) {
+  ++rejected_;
+  if (reject_kinds_[kind]++ == 0) std::cerr << "[" << name_ << "] rejected: " << kind << " (further ones counted in PROCESS_STATUS)\n";
+}
+
+bool ProcessContext::checkSequence(const std::string& channel, int64_t seq) {
+  if (sequences_.accept(channel, seq)) return true;
+  reject(channel + ": duplicate or out-of-order sequence number");
+  return false;
+}
+
+void ProcessContext::publishStatus(const std::string& state) {
+  polarslam::process_status_t msg;
+  msg.utime = nowUtime();
+  msg.name = name_;
+  msg.host = hostName();
+  msg.pid = static_cast<int32_t>(getpid());
+  msg.state = state;
+  msg.restarts = 0;
+  msg.messages_handled = handled_;
+  msg.messages_rejected = rejected_;
+  msg.messages_dropped = sequences_.dropped();
+  for (const auto& [kind, count] : reject_kinds_) {
+    msg.reject_kinds.push_back(kind);
+    msg.reject_counts.push_back(count);
+  }
+  msg.num_reject_kinds = static_cast<int32_t>(msg.reject_kinds.size());
+  msg.cpu_percent = 0.0;
+  msg.rss_mb = residentMegabytes();
+  lcm_->publish("PROCESS_STATUS", &msg);
+}
+
+void ProcessContext::installSignalHandlers() {
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+}
+
+bool ProcessContext::stopRequested() { return g_stop.load(); }
+
+void ProcessContext::run(std::function<bool()> done, std::function<void()> tick,
+                         std::chrono::milliseconds tick_period) {
+  installSignalHandlers();
+  publishStatus("running");
+  auto next_tick = std::chrono::steady_clock::now() + tick_period;
+  auto next_status = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+  while (!g_stop && !(done && done())) {
+    if (lcm_->handleTimeout(50) < 0) {
+      std::cerr << "[" << name_ << "] LCM receive error\n";
+      break;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (tick && now >= next_tick) {
+      tick();
+      next_tick = now + tick_period;
+    }
+    if (now >= next_status) {
+      publishStatus("running");
+      next_status = now + std::chrono::seconds(1);
+    }
+  }
+  publishStatus("stopped");
+}
+
+}  // namespace polarslam

@@ -1,0 +1,96 @@
+#pragma once
+// Scaffolding shared by every polarslam process: LCM connection, typed subscriptions that
+// count undecodable messages, rejection counters logged once per kind, sequence-gap counting,
+// PROCESS_STATUS publishing and a signal-aware main loop.
+#include <lcm/lcm-cpp.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace polarslam {
+
+int64_t nowUtime();
+
+/// Counts per-channel sequence gaps and repeats. Returns false for a duplicate or stale message.
+class SequenceTracker {
+ public:
+  bool accept(const std::string& channel, int64_t seq);
+  int64_t dropped() const { return dropped_; }
+
+ private:
+  std::map<std::string, int64_t> last_;
+  int64_t dropped_ = 0;
+};
+
+class ProcessContext {
+ public:
+  ProcessContext(std::string name, const std::string& lcm_url);
+  ProcessContext(const ProcessContext&) = delete;
+  ProcessContext& operator=(const ProcessContext&) = delete;
+
+  lcm::LCM& lcm() { return *lcm_; }
+  const std::string& name() const { return name_; }
+
+  /// Subscribes with a typed handler; messages that do not decode as MsgT are rejected and counted.
+  template <typename MsgT>
+  void subscribe(const std::string& channel, std::function<void(const MsgT&)> handler) {
+    auto sub = std::make_unique<Subscription>();
+    sub->context = this;
+    sub->raw = [this, handler, channel](const lcm::ReceiveBuffer* rbuf) {
+      MsgT msg;
+      if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) {
+        reject(channel + ": message does not decode as " + MsgT::getTypeName());
+        return;
+      }
+      handler(msg);
+    };
+    lcm::Subscription* s = lcm_->subscribe(channel, &Subscription::onMessage, sub.get());
+    s->setQueueCapacity(1000);
+    subscriptions_.push_back(std::move(sub));
+  }
+
+  template <typename MsgT>
+  void publish(const std::string& channel, const MsgT& msg) { lcm_->publish(channel, &msg); }
+
+  void handled() { ++handled_; }
+  /// Counts a rejected message; the first of each kind is logged to stderr.
+  void reject(const std::string& kind);
+  /// Sequence check for an input message; counts gaps as drops, rejects duplicates.
+  bool checkSequence(const std::string& channel, int64_t seq);
+
+  int64_t handledCount() const { return handled_; }
+  int64_t rejectedCount() const { return rejected_; }
+  const std::map<std::string, int64_t>& rejectKinds() const { return reject_kinds_; }
+
+  void publishStatus(const std::string& state);
+  /// Runs until SIGINT/SIGTERM or until `done()` returns true; calls `tick` about every period.
+  void run(std::function<bool()> done = {}, std::function<void()> tick = {},
+           std::chrono::milliseconds tick_period = std::chrono::milliseconds(1000));
+  static bool stopRequested();
+  static void installSignalHandlers();
+
+ private:
+  struct Subscription {
+    ProcessContext* context = nullptr;
+    std::function<void(const lcm::ReceiveBuffer*)> raw;
+    void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string&) { raw(rbuf); }
+  };
+
+  std::string name_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::vector<std::unique_ptr<Subscription>> subscriptions_;
+  int64_t handled_ = 0, rejected_ = 0;
+  std::map<std::string, int64_t> reject_kinds_;
+  SequenceTracker sequences_;
+};
+
+/// Resolves the LCM URL: explicit option, then LCM_DEFAULT_URL, then multicast with TTL 0.
+std::string resolveLcmUrl(const std::string& option);
+
+}  // namespace polarslam
