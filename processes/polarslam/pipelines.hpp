@@ -1,0 +1,22 @@
+#pragma once
+// The estimators `polarslam run --pipeline NAME` can run, by name.
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "slam/estimator.hpp"
+
+namespace polarslam {
+
+struct PipelineOptions {
+  std::string sensors = "fused";  ///< laser | sonar | fused (feature SLAM)
+  std::string config;             ///< optional YAML with estimator parameters
+};
+
+using PipelineFactory = std::function<std::unique_ptr<Estimator>(const PipelineOptions&)>;
+
+/// name → factory; every pipeline adds itself in pipelines.cpp.
+const std::map<std::string, PipelineFactory>& pipelines();
+
+}  // namespace polarslam
