@@ -1,7 +1,9 @@
 #include "io/text_fields.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <limits>
@@ -93,14 +95,14 @@ std::string readTextFile(const std::string& path) {
   return content.str();
 }
 
-void rejectBinaryContent(std::string_view line, const std::string& name, int line_number) {
-  for (const char c : line) {
-    const auto byte = static_cast<unsigned char>(c);
-    if ((byte < 0x20 && c != '\t' && c != '\r') || byte == 0x7f)
-      throw TextFormatError(name, line_number, "binary content (byte 0x" +
-                                                   std::string(1, "0123456789abcdef"[byte >> 4]) +
-                                                   std::string(1, "0123456789abcdef"[byte & 15]) +
-                                                   "), not a text file");
+void rejectBinaryContent(std::string_view text, const std::string& name) {
+  for (size_t i = 0; i < text.size(); ++i) {
+    const auto byte = static_cast<unsigned char>(text[i]);
+    if ((byte >= 0x20 && byte != 0x7f) || byte == '\t' || byte == '\r' || byte == '\n') continue;
+    const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(i), '\n'));
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "0x%02x", byte);
+    throw TextFormatError(name, line, std::string("binary content (byte ") + hex + "), not a text file");
   }
 }
 

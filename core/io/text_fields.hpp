@@ -40,15 +40,17 @@ std::string formatUtimeAsSeconds(int64_t utime);
 std::string readTextFile(const std::string& path);
 
 /// Calls `on_line(line_number, line)` for every line that is neither blank nor a '#' comment.
-/// Throws TextFormatError for a line holding binary content (NUL or other control bytes).
+/// Throws TextFormatError first if the text holds binary content anywhere.
 template <typename OnLine>
 void forEachDataLine(std::string_view text, const std::string& name, OnLine&& on_line);
 
-/// Throws TextFormatError when the line holds control bytes other than tab and carriage return.
-void rejectBinaryContent(std::string_view line, const std::string& name, int line_number);
+/// Throws TextFormatError, naming the line of the first control byte other than tab, carriage
+/// return and newline (NUL, escape...): such text is a binary file, not a damaged text file.
+void rejectBinaryContent(std::string_view text, const std::string& name);
 
 template <typename OnLine>
 void forEachDataLine(std::string_view text, const std::string& name, OnLine&& on_line) {
+  rejectBinaryContent(text, name);
   int line_number = 0;
   size_t start = 0;
   while (start < text.size()) {
@@ -57,7 +59,6 @@ void forEachDataLine(std::string_view text, const std::string& name, OnLine&& on
     std::string_view line = text.substr(start, end - start);
     start = end + 1;
     ++line_number;
-    rejectBinaryContent(line, name, line_number);
     const size_t first = line.find_first_not_of(" \t\r");
     if (first == std::string_view::npos || line[first] == '#') continue;
     on_line(line_number, line);

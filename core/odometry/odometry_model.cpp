@@ -35,6 +35,21 @@ bool finiteReading(const OdometryReading& r, OdometrySource source) {
   return std::isfinite(r.pose.x) && std::isfinite(r.pose.y) && std::isfinite(r.pose.theta);
 }
 
+struct RawIncrement {
+  double distance = 0.0;  ///< m, |Δs| for wheel travel, chord length for poses
+  double dtheta = 0.0;    ///< rad
+};
+
+RawIncrement rawIncrement(const OdometryReading& from, const OdometryReading& to, OdometrySource source,
+                          double wheelbase) {
+  if (source == OdometrySource::WheelTravel) {
+    const double ds_right = to.right_travel - from.right_travel, ds_left = to.left_travel - from.left_travel;
+    return {std::abs(0.5 * (ds_right + ds_left)), (ds_right - ds_left) / wheelbase};
+  }
+  const Pose2 delta = between(from.pose, to.pose);
+  return {std::hypot(delta.x, delta.y), delta.theta};  // hypot: no overflow for absurd poses
+}
+
 /// Number of equal sub-steps so that each stays within the sub-step length and angle.
 int substepCount(double ds, double dtheta, const OdometryModelParams& params) {
   const double needed = std::max(std::abs(ds) / params.max_substep_length, std::abs(dtheta) / params.max_substep_angle);
@@ -191,20 +206,20 @@ OdometryMotionResult odometryMotion(const OdometryReading& from, const OdometryR
     return failure(OdometryFault::TimeWentBackwards,
                    "odometry time went backwards by " + formatNumber(1e-6 * static_cast<double>(from.utime - to.utime)) +
                        " s");
-  OdometryMotion motion =
-      source == OdometrySource::WheelTravel ? wheelMotion(from, to, params) : poseMotion(from, to, params);
-  if (!std::isfinite(motion.ds) || !std::isfinite(motion.dtheta))
+  // Size check before the arc integration, so that absurd input costs nothing.
+  const RawIncrement raw = rawIncrement(from, to, source, params.wheels.wheelbase);
+  if (!std::isfinite(raw.distance) || !std::isfinite(raw.dtheta))
     return failure(OdometryFault::NonFinite, "odometry increment is not finite");
-  if (std::abs(motion.ds) > params.max_translation || motion.delta.translation().norm() > params.max_translation)
-    return failure(OdometryFault::TooLarge, "odometry jumped " + formatNumber(std::abs(motion.ds)) +
+  if (raw.distance > params.max_translation)
+    return failure(OdometryFault::TooLarge, "odometry jumped " + formatNumber(raw.distance) +
                                                 " m between two readings (limit " +
                                                 formatNumber(params.max_translation) + " m)");
-  if (std::abs(motion.dtheta) > params.max_rotation)
-    return failure(OdometryFault::TooLarge, "odometry turned " + formatNumber(std::abs(motion.dtheta)) +
+  if (std::abs(raw.dtheta) > params.max_rotation)
+    return failure(OdometryFault::TooLarge, "odometry turned " + formatNumber(std::abs(raw.dtheta)) +
                                                 " rad between two readings (limit " +
                                                 formatNumber(params.max_rotation) + " rad)");
   OdometryMotionResult result;
-  result.motion = motion;
+  result.motion = source == OdometrySource::WheelTravel ? wheelMotion(from, to, params) : poseMotion(from, to, params);
   return result;
 }
 
