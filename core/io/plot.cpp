@@ -1,5 +1,6 @@
 #include "io/plot.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <cairo.h>
 
 #include <algorithm>
