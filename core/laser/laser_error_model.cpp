@@ -63,4 +63,22 @@ double motionPerturbation(double alpha, double d, double bearing, double time, c
   return -normal_shift / c - d * s / (c * c) * turn;
 }
 
+ReadingPerturbations readingPerturbations(const LaserErrorModel& model, double alpha, double d, double bearing,
+                                          double range, double line_min_range, double time,
+                                          const SensorMotion& motion) {
+  const LaserErrorParams& p = model.params();
+  ReadingPerturbations xi;
+  if (p.range.incidence != 0.0)
+    xi.incidence = incidenceAnglePerturbation(alpha, bearing, p.range.incidence, p.range.max_incidence);
+  if (p.range.growth != 0.0) xi.growth = distanceGrowthPerturbation(range, line_min_range, p.range.growth);
+  if (p.range.quantum > 0.0) {
+    xi.quantization_sin = quantizationPerturbation(range, p.range.quantum, model.quantizationAmplitude(), 0.0);
+    xi.quantization_cos =
+        quantizationPerturbation(range, p.range.quantum, model.quantizationAmplitude(), std::numbers::pi / 2.0);
+  }
+  if (p.tilt != 0.0) xi.tilt = planeTiltPerturbation(alpha, bearing, range, p.tilt, p.tilt_axis);
+  if (!motion.isZero()) xi.motion = motionPerturbation(alpha, d, bearing, time, motion);
+  return xi;
+}
+
 }  // namespace polarslam

@@ -81,4 +81,17 @@ double planeTiltPerturbation(double alpha, double bearing, double range, double 
 ///   ξ = −(n·δp)/cos(α − φ) − d·sin(α − φ)/cos²(α − φ)·δφ,   n = (cos α, sin α).
 double motionPerturbation(double alpha, double d, double bearing, double time, const SensorMotion& motion);
 
+/// Every systematic perturbation of one reading (metres), for error budgets that visit each
+/// reading once. quantization_sin / _cos are the in-phase and quadrature parts of (2.6).
+struct ReadingPerturbations {
+  double incidence = 0.0, growth = 0.0, quantization_sin = 0.0, quantization_cos = 0.0, tilt = 0.0, motion = 0.0;
+};
+
+/// The perturbations of a reading at `bearing` hitting the line (α, d) at true range `range`;
+/// `line_min_range` is the line's shortest range, `time` the reading's time after the scan's
+/// reference time (ignored when the motion is zero).
+ReadingPerturbations readingPerturbations(const LaserErrorModel& model, double alpha, double d, double bearing,
+                                          double range, double line_min_range, double time,
+                                          const SensorMotion& motion);
+
 }  // namespace polarslam

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "laser/error_projection.hpp"
+
 namespace polarslam {
 namespace {
 
@@ -229,37 +231,31 @@ LineErrorBudget lineErrorBudget(const LineFit& fit, const PolarReadings& r, std:
                                 const LaserErrorModel& model, const SensorMotion& motion) {
   LineErrorBudget b;
   if (!fit.ok()) return b;
-  const LaserErrorParams& p = model.params();
   const PolarLine& line = fit.line;
-  const Mat2& normal_inverse = fit.normal_inverse;
-  auto project = [&](auto&& xi) { return projectRangeErrors(line, normal_inverse, r, xi); };
-
-  b.noise_cov = fit.covariance(model.rangeSigma());  // (2.25)
-  const Vec2 unit_bias = project([](size_t, const Incidence&, double) { return 1.0; });
-  b.scan_bias_cov = p.range.scan_bias_sigma * p.range.scan_bias_sigma * unit_bias * unit_bias.transpose();  // (A.21)
-  b.fixed_bias = p.range.fixed_bias * unit_bias;  // (2.33), (2.35)
-  if (p.range.incidence != 0.0)
-    b.incidence = project([&](size_t i, const Incidence&, double) {
-      return incidenceAnglePerturbation(line.alpha, r.bearing[i], p.range.incidence, p.range.max_incidence);
-    });
-  if (p.range.growth != 0.0) {
-    const double r_min = lineMinRange(line, r);
-    b.growth = project([&](size_t, const Incidence&, double range) {
-      return distanceGrowthPerturbation(range, r_min, p.range.growth);
-    });
+  const bool timed = times.size() == r.size();
+  const SensorMotion effective_motion = timed ? motion : SensorMotion{};
+  const double r_min = lineMinRange(line, r);
+  const double ca = std::cos(line.alpha), sa = std::sin(line.alpha);
+  RangeErrorSums<2> sums;
+  for (size_t i = 0; i < r.size(); ++i) {  // one pass: Σ h_i ξ_i for every source
+    const Incidence inc = incidence(ca, sa, r, i);
+    const double range = line.d / inc.c;
+    sums.add(lineRangeJacobian(line, inc.c, inc.s),
+             readingPerturbations(model, line.alpha, line.d, r.bearing[i], range, r_min, timed ? times[i] : 0.0,
+                                  effective_motion));
   }
-  b.quantization = quantizationLineErrorBound(line, r, p.range.quantum, model.quantizationAmplitude());
-  if (p.tilt != 0.0)
-    b.plane_tilt = project([&](size_t i, const Incidence&, double range) {
-      return planeTiltPerturbation(line.alpha, r.bearing[i], range, p.tilt, p.tilt_axis);
-    });
-  b.yaw = yawMisalignmentLineError(p.yaw_error);
-  if (times.size() == r.size() && !motion.isZero())
-    b.motion = project([&](size_t i, const Incidence&, double) {
-      return motionPerturbation(line.alpha, line.d, r.bearing[i], times[i], motion);
-    });
-  b.systematic_bound = b.fixed_bias.cwiseAbs() + b.incidence.cwiseAbs() + b.growth.cwiseAbs() +
-                       b.quantization.cwiseAbs() + b.plane_tilt.cwiseAbs() + b.yaw.cwiseAbs() + b.motion.cwiseAbs();
+  const SourceErrors<2> e = projectSourceErrors<2, 2>(sums, fit.normal_inverse, Mat2::Identity(), model.params(),
+                                                      yawMisalignmentLineError(model.params().yaw_error));
+  b.noise_cov = fit.covariance(model.rangeSigma());                   // (2.25)
+  b.scan_bias_cov = e.scanBiasCov(model.params().range.scan_bias_sigma);  // (A.21)
+  b.fixed_bias = e.fixed_bias;
+  b.incidence = e.incidence;
+  b.growth = e.growth;
+  b.quantization = e.quantization;
+  b.plane_tilt = e.plane_tilt;
+  b.yaw = e.yaw;
+  b.motion = e.motion;
+  b.systematic_bound = e.bound();  // §2.3.10
   return b;
 }
 
