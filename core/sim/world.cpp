@@ -106,8 +106,8 @@ void World::addBox(const Vec2& center, const Vec2& size, double angle, Material 
 
 void World::rebuild() {
   assignSurfaces();
-  findVertices();
   buildGrid();
+  findVertices();  // uses the grid
 }
 
 void World::assignSurfaces() {
@@ -131,20 +131,38 @@ void World::assignSurfaces() {
 
 void World::findVertices() {
   vertices_.clear();
+  // Segments and vertices near p, looked up through the grid (built first).
+  auto cellsAround = [&](const Vec2& p, auto&& visit) {
+    const int i0 = std::max(0, static_cast<int>(std::floor((p.x() - kVertexTolerance - grid_origin_.x()) / cell_size_)));
+    const int i1 = std::min(grid_nx_ - 1, static_cast<int>(std::floor((p.x() + kVertexTolerance - grid_origin_.x()) / cell_size_)));
+    const int j0 = std::max(0, static_cast<int>(std::floor((p.y() - kVertexTolerance - grid_origin_.y()) / cell_size_)));
+    const int j1 = std::min(grid_ny_ - 1, static_cast<int>(std::floor((p.y() + kVertexTolerance - grid_origin_.y()) / cell_size_)));
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) visit(static_cast<size_t>(j) * grid_nx_ + i);
+  };
+  std::vector<std::vector<int>> vertices_in_cell(cells_.size());
   auto known = [&](const Vec2& p) {
-    return std::any_of(vertices_.begin(), vertices_.end(),
-                       [&](const WorldVertex& v) { return (v.position - p).norm() < kVertexTolerance; });
+    bool found = false;
+    cellsAround(p, [&](size_t cell) {
+      for (int v : vertices_in_cell[cell]) found |= (vertices_[v].position - p).norm() < kVertexTolerance;
+    });
+    return found;
   };
   auto addArm = [](WorldVertex& v, const Vec2& towards, int segment) {
     const Vec2 d = towards - v.position;
     v.arms.push_back({std::atan2(d.y(), d.x()), segment});
   };
+  std::vector<int> nearby;
   for (const WallSegment& candidate : segments_) {
     for (const Vec2& p : {candidate.a, candidate.b}) {
       if (known(p)) continue;
+      nearby.clear();
+      cellsAround(p, [&](size_t cell) { nearby.insert(nearby.end(), cells_[cell].begin(), cells_[cell].end()); });
+      std::sort(nearby.begin(), nearby.end());
+      nearby.erase(std::unique(nearby.begin(), nearby.end()), nearby.end());
       WorldVertex v;
       v.position = p;
-      for (int j = 0; j < static_cast<int>(segments_.size()); ++j) {
+      for (int j : nearby) {
         const WallSegment& s = segments_[j];
         if ((s.a - p).norm() < kVertexTolerance) {
           addArm(v, s.b, j);
@@ -159,7 +177,10 @@ void World::findVertices() {
                 [](const WorldVertex::Arm& x, const WorldVertex::Arm& y) { return x.angle < y.angle; });
       const bool straight_through =
           v.arms.size() == 2 && std::abs(ccwAngle(v.arms[0].angle, v.arms[1].angle) - kPi) < kFlatTolerance;
-      if (!straight_through) vertices_.push_back(std::move(v));
+      if (straight_through) continue;
+      const int index = static_cast<int>(vertices_.size());
+      vertices_.push_back(std::move(v));
+      cellsAround(p, [&](size_t cell) { vertices_in_cell[cell].push_back(index); });
     }
   }
 }
