@@ -52,16 +52,39 @@ void forEachReading(const RightAngleCorner& corner, const PolarReadings& arm1, c
 }
 
 CornerNormalEquations accumulate(const RightAngleCorner& corner, const PolarReadings& arm1, const PolarReadings& arm2) {
-  CornerNormalEquations eq;
+  // Arm-1 rows have no d₂ entry and arm-2 rows no d₁ entry, so HᵀH has a zero (d₁, d₂) element.
+  double aa = 0.0, ad1 = 0.0, ad2 = 0.0, d1d1 = 0.0, d2d2 = 0.0, ea = 0.0, ed1 = 0.0, ed2 = 0.0, sse = 0.0;
+  double min_cos = 1.0;
   const PolarReadings* arms[2] = {&arm1, &arm2};
-  forEachReading(corner, arm1, arm2, [&](int arm, size_t i, double, double d, double c, double s) {
-    eq.min_cos = std::min(eq.min_cos, c);
-    const Vec3Row h = cornerRow(corner, arm, c, s);
-    const double e = arms[arm]->range[i] - d / c;  // r_m − r̂
-    eq.hth += h * h.transpose();
-    eq.hte += h * e;
-    eq.sse += e * e;
-  });
+  const double alphas[2] = {corner.alpha, corner.alpha2()};
+  const double ds[2] = {corner.d1, corner.d2};
+  for (int arm = 0; arm < 2; ++arm) {
+    const PolarReadings& r = *arms[arm];
+    const double ca = std::cos(alphas[arm]), sa = std::sin(alphas[arm]), d = ds[arm];
+    double a_d = 0.0, d_d = 0.0, e_d = 0.0;
+    for (size_t i = 0; i < r.size(); ++i) {
+      const double c = ca * r.cos_bearing[i] + sa * r.sin_bearing[i];  // cos(α_k − φ_i)
+      const double s = sa * r.cos_bearing[i] - ca * r.sin_bearing[i];  // sin(α_k − φ_i)
+      min_cos = std::min(min_cos, c);
+      const double inv = 1.0 / c;
+      const double h_alpha = d * s * inv * inv, h_d = inv;
+      const double e = r.range[i] - d * inv;  // r_m − r̂
+      aa += h_alpha * h_alpha;
+      a_d += h_alpha * h_d;
+      d_d += h_d * h_d;
+      ea += h_alpha * e;
+      e_d += h_d * e;
+      sse += e * e;
+    }
+    (arm == 0 ? ad1 : ad2) = a_d;
+    (arm == 0 ? d1d1 : d2d2) = d_d;
+    (arm == 0 ? ed1 : ed2) = e_d;
+  }
+  CornerNormalEquations eq;
+  eq.hth << aa, ad1, ad2, ad1, d1d1, 0.0, ad2, 0.0, d2d2;
+  eq.hte << ea, ed1, ed2;
+  eq.sse = sse;
+  eq.min_cos = min_cos;
   return eq;
 }
 
@@ -115,6 +138,17 @@ Mat3 CornerFit::covariance(double range_sigma) const {
   return j * parameterCovariance(range_sigma) * j.transpose();
 }
 
+RightAngleCorner cornerFromArms(const PolarLine& arm1, const PolarLine& arm2) {
+  RightAngleCorner corner;
+  corner.turn = wrapAngle(arm2.alpha - arm1.alpha) >= 0.0 ? 1 : -1;
+  // Both arms vote for α: arm 2's normal turned back by t·π/2.
+  const double from_arm2 = arm2.alpha - corner.turn * std::numbers::pi / 2.0;
+  corner.alpha = wrapAngle(arm1.alpha + 0.5 * wrapAngle(from_arm2 - arm1.alpha));
+  corner.d1 = arm1.d;
+  corner.d2 = arm2.d;
+  return corner;
+}
+
 CornerFit fitRightAngleCorner(const PolarReadings& arm1, const PolarReadings& arm2, const LineFitOptions& options) {
   CornerFit fit;
   if (arm1.size() < 3 || arm2.size() < 3) return fit;
@@ -123,14 +157,7 @@ CornerFit fitRightAngleCorner(const PolarReadings& arm1, const PolarReadings& ar
     fit.status = CornerFitStatus::ArmFitFailed;
     return fit;
   }
-  RightAngleCorner initial;
-  initial.turn = wrapAngle(line2.line.alpha - line1.line.alpha) >= 0.0 ? 1 : -1;
-  // Both arms vote for α: arm 2's normal turned back by t·π/2.
-  const double from_arm2 = line2.line.alpha - initial.turn * std::numbers::pi / 2.0;
-  initial.alpha = wrapAngle(line1.line.alpha + 0.5 * wrapAngle(from_arm2 - line1.line.alpha));
-  initial.d1 = line1.line.d;
-  initial.d2 = line2.line.d;
-  return fitRightAngleCorner(arm1, arm2, initial, options);
+  return fitRightAngleCorner(arm1, arm2, cornerFromArms(line1.line, line2.line), options);
 }
 
 CornerFit fitRightAngleCorner(const PolarReadings& arm1, const PolarReadings& arm2, const RightAngleCorner& initial,
@@ -138,8 +165,9 @@ CornerFit fitRightAngleCorner(const PolarReadings& arm1, const PolarReadings& ar
   CornerFit fit;
   if (arm1.size() < 2 || arm2.size() < 2 || arm1.size() + arm2.size() < 4) return fit;
   RightAngleCorner corner = initial;
+  CornerNormalEquations eq;
   for (fit.iterations = 0; fit.iterations < options.max_iterations && !fit.converged; ++fit.iterations) {
-    const CornerNormalEquations eq = accumulate(corner, arm1, arm2);
+    eq = accumulate(corner, arm1, arm2);
     if (!(eq.min_cos > 0.0)) {
       fit.status = CornerFitStatus::GrazingBeam;
       return fit;
@@ -161,7 +189,7 @@ CornerFit fitRightAngleCorner(const PolarReadings& arm1, const PolarReadings& ar
     return fit;
   }
   corner.alpha = wrapAngle(corner.alpha);
-  const CornerNormalEquations eq = accumulate(corner, arm1, arm2);
+  if (!fit.converged) eq = accumulate(corner, arm1, arm2);  // else the last one is at the solution
   if (eq.min_cos < std::cos(options.max_incidence)) {
     fit.status = CornerFitStatus::GrazingBeam;
     return fit;

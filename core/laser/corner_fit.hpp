@@ -54,6 +54,10 @@ struct CornerFit {
   Mat3 covariance(double range_sigma) const;
 };
 
+/// Starting corner from two roughly perpendicular lines: α is the average of arm 1's normal and
+/// arm 2's normal turned back by t·π/2.
+RightAngleCorner cornerFromArms(const PolarLine& arm1, const PolarLine& arm2);
+
 /// Fits a right-angle corner to two arms of readings, each started from its own polar line fit.
 CornerFit fitRightAngleCorner(const PolarReadings& arm1, const PolarReadings& arm2,
                               const LineFitOptions& options = {});

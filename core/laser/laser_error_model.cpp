@@ -30,8 +30,9 @@ SensorMotion sensorMotionFromBaseTwist(const Pose2& mount, double v, double omeg
 
 LaserErrorModel::LaserErrorModel(const LaserErrorParams& params) : params_(params) {
   const RangeErrorParams& r = params.range;
-  const double sigma = r.quantum > 0.0 ? std::sqrt(phaseAveragedQuantizerVariance(r.quantum, r.noise_sigma))
-                                       : r.noise_sigma;
+  const double quantizer_variance =
+      r.quantum > 0.0 ? phaseAveragedQuantizerVariance(r.quantum, r.noise_sigma) : r.noise_sigma * r.noise_sigma;
+  const double sigma = std::sqrt(quantizer_variance + params.output_noise_sigma * params.output_noise_sigma);
   range_sigma_ = std::max(sigma, params.min_range_sigma);
   quantization_amplitude_ = quantizationBiasAmplitude(r.quantum, r.noise_sigma);
 }

@@ -15,6 +15,7 @@ namespace polarslam {
 /// sign is unknown, and the bound of section 2.3.10 sums absolute values anyway.
 struct LaserErrorParams {
   RangeErrorParams range;          ///< (2.8): r_b, per-scan bias σ, k, w, q_r, σ_n
+  double output_noise_sigma = 0.0; ///< m: extra white noise after the quantiser (adds to σ_r²)
   double tilt = 0.0;               ///< ε, rad: tilt of the scan plane against the horizontal
   double tilt_axis = 0.0;          ///< ψ, rad: bearing of the in-plane axis the plane is tilted about
   double yaw_error = 0.0;          ///< δ, rad: in-plane mounting yaw uncertainty (adds to α directly)
@@ -42,7 +43,8 @@ class LaserErrorModel {
 
   const LaserErrorParams& params() const { return params_; }
   /// σ_r of the white range noise r_n after the quantiser: the quantiser's output variance (2.5)
-  /// averaged over the position of r′ within a step; σ_n when there is no quantiser.
+  /// averaged over the position of r′ within a step (σ_n² without a quantiser), plus the
+  /// variance of any noise added after the quantiser.
   double rangeSigma() const { return range_sigma_; }
   /// b of (2.6), fitted numerically to (2.4).
   double quantizationAmplitude() const { return quantization_amplitude_; }

@@ -29,10 +29,14 @@ void PolarReadingBuffer::reserve(size_t n) {
 }
 
 void PolarReadingBuffer::push_back(double bearing, double range) {
+  push_back(bearing, range, std::cos(bearing), std::sin(bearing));
+}
+
+void PolarReadingBuffer::push_back(double bearing, double range, double cos_bearing, double sin_bearing) {
   bearing_.push_back(bearing);
   range_.push_back(range);
-  cos_.push_back(std::cos(bearing));
-  sin_.push_back(std::sin(bearing));
+  cos_.push_back(cos_bearing);
+  sin_.push_back(sin_bearing);
 }
 
 const char* toString(LineFitStatus status) {
@@ -49,26 +53,25 @@ const char* toString(LineFitStatus status) {
 PolarLine fitLineTotalLeastSquares(const PolarReadings& readings) {
   const size_t n = readings.size();
   if (n < 2) return {0.0, std::numeric_limits<double>::quiet_NaN()};
-  double mx = 0.0, my = 0.0;
+  // One pass of sums, taken relative to the first point to keep the cancellation harmless.
+  const Vec2 origin = readings.point(0);
+  double sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
   for (size_t i = 0; i < n; ++i) {
-    const Vec2 p = readings.point(i);
-    mx += p.x();
-    my += p.y();
+    const double x = readings.range[i] * readings.cos_bearing[i] - origin.x();
+    const double y = readings.range[i] * readings.sin_bearing[i] - origin.y();
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    syy += y * y;
+    sxy += x * y;
   }
-  mx /= static_cast<double>(n);
-  my /= static_cast<double>(n);
-  double sxx = 0.0, syy = 0.0, sxy = 0.0;
-  for (size_t i = 0; i < n; ++i) {
-    const Vec2 p = readings.point(i);
-    const double dx = p.x() - mx, dy = p.y() - my;
-    sxx += dx * dx;
-    syy += dy * dy;
-    sxy += dx * dy;
-  }
+  const double inv_n = 1.0 / static_cast<double>(n);
+  const double mx = sx * inv_n, my = sy * inv_n;
+  const double cxx = sxx - sx * mx, cyy = syy - sy * my, cxy = sxy - sx * my;
   // Normal direction = eigenvector of the scatter matrix with the smaller eigenvalue.
   PolarLine line;
-  line.alpha = 0.5 * std::atan2(-2.0 * sxy, syy - sxx);
-  line.d = mx * std::cos(line.alpha) + my * std::sin(line.alpha);
+  line.alpha = 0.5 * std::atan2(-2.0 * cxy, cyy - cxx);
+  line.d = (mx + origin.x()) * std::cos(line.alpha) + (my + origin.y()) * std::sin(line.alpha);
   if (line.d < 0.0) {
     line.d = -line.d;
     line.alpha += std::numbers::pi;
@@ -136,8 +139,9 @@ LineFit fitLinePolar(const PolarReadings& readings, const PolarLine& initial, co
   if (readings.size() < 3) return fit;
   const double min_cos = std::cos(options.max_incidence);
   PolarLine line = initial;
+  PolarNormalEquations eq;
   for (fit.iterations = 0; fit.iterations < options.max_iterations && !fit.converged; ++fit.iterations) {
-    const PolarNormalEquations eq = accumulate(readings, line);
+    eq = accumulate(readings, line);
     if (!(eq.min_cos > 0.0)) {  // a beam misses the line: no valid linearisation
       fit.status = LineFitStatus::GrazingBeam;
       return fit;
@@ -158,9 +162,11 @@ LineFit fitLinePolar(const PolarReadings& readings, const PolarLine& initial, co
   if (line.d < 0.0) {
     line.d = -line.d;
     line.alpha += std::numbers::pi;
+    fit.converged = false;  // flipped: the last linearisation no longer applies
   }
   line.alpha = wrapAngle(line.alpha);
-  const PolarNormalEquations eq = accumulate(readings, line);
+  // After a negligible last step the last linearisation is the one at the solution.
+  if (!fit.converged) eq = accumulate(readings, line);
   if (eq.min_cos < min_cos) {
     fit.status = LineFitStatus::GrazingBeam;
     return fit;

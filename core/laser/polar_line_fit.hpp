@@ -40,6 +40,8 @@ class PolarReadingBuffer {
   PolarReadingBuffer(std::span<const double> bearings, std::span<const double> ranges);
   void clear();
   void push_back(double bearing, double range);
+  /// With the bearing's cosine and sine already known.
+  void push_back(double bearing, double range, double cos_bearing, double sin_bearing);
   void reserve(size_t n);
   size_t size() const { return bearing_.size(); }
   PolarReadings view() const { return {bearing_, range_, cos_, sin_}; }

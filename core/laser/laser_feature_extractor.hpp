@@ -1,0 +1,73 @@
+#pragma once
+// LaserScan (+ optional break-hint bearings, + optional laser motion) → FeatureSet of polar
+// lines and right-angle corners in the laser frame, each with the covariance a Kalman filter
+// should use (notes §16.11): random part σ_r²(HᵀH)⁻¹ + C_b plus the systematic bound.
+#include <span>
+#include <string>
+#include <vector>
+
+#include "geometry/features.hpp"
+#include "laser/corner_fit.hpp"
+#include "laser/laser_error_model.hpp"
+#include "laser/laser_scan.hpp"
+#include "laser/line_errors.hpp"
+#include "laser/polar_line_fit.hpp"
+#include "laser/segmentation.hpp"
+
+namespace polarslam {
+
+/// A SICK LMS-like laser of which only the white noise is known: σ_n = 1 cm.
+inline LaserErrorParams defaultLaserErrors() {
+  LaserErrorParams p;
+  p.range.noise_sigma = 0.01;
+  return p;
+}
+
+struct LaserFeatureConfig {
+  LaserErrorParams errors = defaultLaserErrors();
+  SegmentationParams segmentation;
+  LineFitOptions fit;                   ///< max_incidence: readings beyond it are trimmed from a line
+  bool corners = true;                  ///< fit right-angle corners to perpendicular neighbours
+  int corner_split_search = 2;          ///< try moving the arms' junction by up to this many readings
+  double corner_max_rms_ratio = 2.0;    ///< corner fit RMS ≤ this × max(arm line RMS, σ_r)
+  double corner_junction_distance = 0.10;  ///< m (+3σ_r + 2 beam spacings): apex to the arms' ends
+};
+
+/// Reads the configuration from YAML. Either file kind works:
+///  - a robot file (config/robots/*.yaml): the error model comes from its `laser:` section
+///    (`errors:`, `tilt_deg`, `tilt_axis_deg`), exactly as the simulator uses it;
+///  - a features file (config/laser-features.yaml) with a `laser_features:` section.
+/// A `laser_features:` section (in either) sets segmentation and corner options and may
+/// override the error model. Throws std::runtime_error "FILE:LINE: ..." on bad input.
+LaserFeatureConfig loadLaserFeatureConfig(const std::string& path);
+
+/// Everything the extractor computed, for diagnostics and benchmarks.
+struct ExtractionDetails {
+  int valid_readings = 0;
+  Segmentation segmentation;
+  std::vector<LineFit> line_fits;              ///< one per output line
+  std::vector<LineErrorBudget> line_budgets;   ///< one per output line
+  std::vector<CornerFit> corner_fits;          ///< one per output corner
+  std::vector<CornerErrorBudget> corner_budgets;
+};
+
+class LaserFeatureExtractor {
+ public:
+  explicit LaserFeatureExtractor(const LaserFeatureConfig& config = {});
+
+  /// Features of one scan in the laser frame (frame "laser", sensor_pose = scan.laser_pose,
+  /// utime/seq copied). `break_bearings` (rad, laser frame) force segment breaks; `motion` is the
+  /// laser's velocity during the scan (enters the systematic bound). Never throws on bad scans:
+  /// a scan validateScan() refuses gives an empty set.
+  FeatureSet extract(const LaserScan& scan, std::span<const double> break_bearings = {},
+                     const SensorMotion& motion = {}, ExtractionDetails* details = nullptr) const;
+
+  const LaserFeatureConfig& config() const { return config_; }
+  const LaserErrorModel& errorModel() const { return model_; }
+
+ private:
+  LaserFeatureConfig config_;
+  LaserErrorModel model_;
+};
+
+}  // namespace polarslam
