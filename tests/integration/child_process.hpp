@@ -1,5 +1,6 @@
 #pragma once
 // Starting real polarslam processes (and LCM's own tools) from integration tests.
+#include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
