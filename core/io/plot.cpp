@@ -97,7 +97,7 @@ void drawAxes(cairo_t* cr, const Plot& plot, const Frame& f) {
   }
   drawText(cr, f.left + f.width / 2, plot.height - 25, plot.x_label, 14, 0.5);
   cairo_save(cr);
-  cairo_move_to(cr, 22, f.top + f.height / 2);
+  cairo_translate(cr, 22, f.top + f.height / 2);
   cairo_rotate(cr, -M_PI / 2);
   drawText(cr, 0, 0, plot.y_label, 14, 0.5);
   cairo_restore(cr);
