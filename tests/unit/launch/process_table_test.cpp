@@ -1,0 +1,151 @@
+// The launcher's bookkeeping: start schedule, restart back-off, shutdown.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include "launch/process_table.hpp"
+#include "launch/status_view.hpp"
+
+namespace polarslam {
+namespace {
+
+using namespace std::chrono_literals;
+
+CommandSpec command(const std::string& name, double start_delay = 0.0, bool respawn = true) {
+  CommandSpec c;
+  c.name = name;
+  c.argv = {"sleep", "100"};
+  c.start_delay_s = start_delay;
+  c.auto_respawn = respawn;
+  c.backoff = RestartBackoff{0.25, 2.0, 1.0, 10.0};
+  return c;
+}
+
+const LaunchClock::time_point t0{};
+const ExitStatus kKilled{true, SIGKILL};
+const ExitStatus kFailure{false, 3};
+const ExitStatus kSuccess{false, 0};
+
+TEST(ProcessTable, StartsEachCommandItsDelayAfterThePrevious) {
+  ProcessTable table({command("a"), command("b", 1.0), command("c", 0.5)}, t0);
+  EXPECT_EQ(table.dueToStart(t0), std::vector<size_t>{0});
+  EXPECT_EQ(table.dueToStart(t0 + 1s), (std::vector<size_t>{0, 1}));
+  EXPECT_EQ(table.dueToStart(t0 + 1499ms), (std::vector<size_t>{0, 1}));
+  EXPECT_EQ(table.dueToStart(t0 + 1500ms), (std::vector<size_t>{0, 1, 2}));
+  table.started(0, 100, t0);
+  EXPECT_EQ(*table.nextStart(), t0 + 1s);
+  EXPECT_EQ(table[0].state, RunState::Running);
+  EXPECT_EQ(*table.indexOfPid(100), 0u);
+  EXPECT_FALSE(table.indexOfPid(101).has_value());
+}
+
+TEST(ProcessTable, CrashRestartsWithDoublingBackoff) {
+  ProcessTable table({command("a")}, t0);
+  table.started(0, 100, t0);
+  EXPECT_EQ(table.exited(0, kKilled, t0 + 1s), RunState::Restarting);
+  EXPECT_EQ(table[0].pid, -1);
+  EXPECT_EQ(table[0].last_exit, "killed by SIGKILL");
+  EXPECT_EQ(*table.nextStart(), t0 + 1250ms);
+  EXPECT_TRUE(table.dueToStart(t0 + 1249ms).empty());
+  table.started(0, 101, t0 + 1250ms);
+  EXPECT_EQ(table[0].restarts, 1);
+  EXPECT_EQ(table.exited(0, kFailure, t0 + 2s), RunState::Restarting);
+  EXPECT_EQ(*table.nextStart(), t0 + 2500ms);
+  table.started(0, 102, t0 + 2500ms);
+  table.exited(0, kFailure, t0 + 3s);
+  EXPECT_EQ(*table.nextStart(), t0 + 4s);  // 1 s cap
+  table.started(0, 103, t0 + 4s);
+  EXPECT_EQ(table[0].restarts, 3);
+}
+
+TEST(ProcessTable, LongRunBeforeACrashResetsTheBackoff) {
+  ProcessTable table({command("a")}, t0);
+  table.started(0, 100, t0);
+  table.exited(0, kKilled, t0 + 1s);
+  table.started(0, 101, t0 + 2s);
+  table.exited(0, kKilled, t0 + 3s);
+  EXPECT_EQ(*table.nextStart(), t0 + 3500ms);
+  table.started(0, 102, t0 + 4s);
+  table.exited(0, kKilled, t0 + 14s);  // ran 10 s: counts as a first crash again
+  EXPECT_EQ(*table.nextStart(), t0 + 14250ms);
+}
+
+TEST(ProcessTable, CleanExitOrNoRespawnEndsTheProcess) {
+  ProcessTable table({command("done"), command("fragile", 0.0, false)}, t0);
+  table.started(0, 100, t0);
+  table.started(1, 101, t0);
+  EXPECT_EQ(table.exited(0, kSuccess, t0 + 1s), RunState::Stopped);
+  EXPECT_TRUE(table.anyActive());
+  EXPECT_EQ(table.exited(1, kFailure, t0 + 1s), RunState::Crashed);
+  EXPECT_EQ(table[1].last_exit, "exit 3");
+  EXPECT_FALSE(table.anyActive());
+  EXPECT_TRUE(table.anyFailed());
+  EXPECT_FALSE(table.nextStart().has_value());
+}
+
+TEST(ProcessTable, ExitAfterAStopRequestIsAStopEvenWhenKilled) {
+  CommandSpec slow = command("b");
+  slow.stop_grace_s = 2.5;
+  ProcessTable table({command("a"), slow}, t0);
+  table.started(0, 100, t0);
+  table.started(1, 101, t0);
+  table.cancelPendingStarts();
+  table.stopping(1, t0 + 1s);
+  EXPECT_EQ(table[1].kill_deadline, t0 + 3500ms);
+  EXPECT_EQ(table.exited(1, kKilled, t0 + 3500ms), RunState::Stopped);
+  // A crash during shutdown is not restarted.
+  EXPECT_EQ(table.exited(0, kKilled, t0 + 2s), RunState::Crashed);
+  EXPECT_FALSE(table.anyActive());
+}
+
+TEST(ProcessTable, ShutdownCancelsPendingStarts) {
+  ProcessTable table({command("a"), command("b", 5.0)}, t0);
+  table.started(0, 100, t0);
+  table.exited(0, kKilled, t0 + 1s);
+  table.cancelPendingStarts();
+  EXPECT_EQ(table[0].state, RunState::Crashed);
+  EXPECT_EQ(table[1].state, RunState::Stopped);
+  EXPECT_FALSE(table.anyActive());
+  EXPECT_TRUE(table.dueToStart(t0 + 10s).empty());
+}
+
+TEST(ProcessTable, FailedStartIsKeptWithItsReason) {
+  ProcessTable table({command("ghost"), command("b")}, t0);
+  table.startFailed(0, "executable 'ghost' not found");
+  table.started(1, 100, t0);
+  EXPECT_EQ(table[0].state, RunState::Failed);
+  EXPECT_TRUE(table.dueToStart(t0 + 100s).empty());
+  EXPECT_TRUE(table.anyActive());
+  EXPECT_TRUE(table.anyFailed());
+}
+
+TEST(ProcessTable, ExitStatusFromWaitStatus) {
+  const ExitStatus exited = ExitStatus::fromWaitStatus(7 << 8);  // W_EXITCODE(7, 0)
+  EXPECT_FALSE(exited.signaled);
+  EXPECT_EQ(exited.code, 7);
+  EXPECT_EQ(exited.describe(), "exit 7");
+  const ExitStatus killed = ExitStatus::fromWaitStatus(SIGTERM);
+  EXPECT_TRUE(killed.signaled);
+  EXPECT_EQ(killed.describe(), "killed by SIGTERM");
+  EXPECT_TRUE(ExitStatus::fromWaitStatus(0).clean());
+}
+
+TEST(StatusView, TableShowsEveryCommand) {
+  ProcessTable table({command("sim"), command("ekf-slam"), command("ghost")}, t0);
+  table.started(0, 4242, t0);
+  table.setUsage(0, 12.34, 56.78);
+  table.started(1, 4243, t0);
+  table.exited(1, kKilled, t0 + 2s);
+  table.startFailed(2, "executable 'ghost' not found");
+  const auto lines = formatStatusTable(table, t0 + 83s);
+  ASSERT_EQ(lines.size(), 4u);
+  EXPECT_EQ(lines[0], "NAME      STATE          PID RESTARTS   CPU%   RSS_MB   UPTIME  NOTE");
+  EXPECT_EQ(lines[1], "sim       running       4242        0   12.3     56.8     1:23  ");
+  EXPECT_EQ(lines[2], "ekf-slam  restarting       -        0    0.0      0.0        -  last: killed by SIGKILL");
+  EXPECT_EQ(lines[3], "ghost     failed           -        0    0.0      0.0        -  executable 'ghost' not found");
+  EXPECT_EQ(formatStatusTable(table, t0, 10)[3], "ghost     ");
+  EXPECT_EQ(formatUptime(3723.9), "1:02:03");
+}
+
+}  // namespace
+}  // namespace polarslam
