@@ -185,6 +185,37 @@ TEST(Simulator, BundledWorldsLoadAndTheirPathsStayClearOfWalls) {
   }
 }
 
+double closestWall(const World& w, const Vec2& p) {
+  double closest = 1e9;
+  for (const WallSegment& seg : w.segments()) {
+    const Vec2 e = seg.b - seg.a;
+    const double u = std::clamp((p - seg.a).dot(e) / e.squaredNorm(), 0.0, 1.0);
+    closest = std::min(closest, (seg.a + u * e - p).norm());
+  }
+  return closest;
+}
+
+TEST(Simulator, OfficeDriveClosesItsLoopInAFewMinutesWithoutTouchingWalls) {
+  SimConfig cfg = test::exactConfig();
+  cfg.laser.enabled = false;
+  cfg.sonars.clear();
+  const World w = loadWorld(sourcePath("config/worlds/office.yaml"));
+  Simulator sim(w, cfg, 1);
+  const RecordingSink s = test::run(sim, 600.0);
+  EXPECT_TRUE(sim.finished());
+  EXPECT_GT(sim.time(), 120.0);
+  EXPECT_LT(sim.time(), 240.0);
+  double length = 0.0, nearest_wall = 1e9;
+  for (size_t i = 0; i < s.truth.size(); ++i) {
+    if (i > 0) length += (s.truth[i].pose.translation() - s.truth[i - 1].pose.translation()).norm();
+    if (i % 5 == 0) nearest_wall = std::min(nearest_wall, closestWall(w, s.truth[i].pose.translation()));
+  }
+  EXPECT_GT(length, 70.0);
+  EXPECT_LT(length, 85.0);
+  EXPECT_GT(nearest_wall, 0.3);  // doors are 1.2 m wide; pure pursuit cuts corners by < 0.3 m
+  EXPECT_LT((s.truth.back().pose.translation() - s.truth.front().pose.translation()).norm(), 1.0);
+}
+
 TEST(Simulator, OfficeWorldHasTheFeaturesTheExperimentsNeed) {
   const World w = loadWorld(sourcePath("config/worlds/office.yaml"));
   int glass = 0, absorbing = 0;
