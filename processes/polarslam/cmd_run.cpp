@@ -7,6 +7,7 @@
 
 #include "command_registry.hpp"
 #include "eval/ate.hpp"
+#include "eval/eval_json.hpp"
 #include "io/image.hpp"
 #include "io/plot.hpp"
 #include "io/tum.hpp"
@@ -35,10 +36,6 @@ std::vector<Vec2> positions(const std::vector<PoseStamped>& poses) {
   out.reserve(poses.size());
   for (const auto& p : poses) out.push_back(p.pose.translation());
   return out;
-}
-
-nlohmann::json statisticsJson(const ErrorStatistics& s) {
-  return {{"count", s.count}, {"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median}, {"std", s.std}, {"max", s.max}};
 }
 
 void plotTrajectories(const std::string& path, const std::string& title, const std::vector<PoseStamped>& estimate,
@@ -108,11 +105,7 @@ void runPipeline(const RunOptions& o) {
   report["trajectory_poses"] = estimate.size();
   if (!truth.empty() && !estimate.empty()) {
     const AteResult ate = evaluateAte(estimate, truth);
-    report["ate"] = {{"matched", ate.matched},
-                     {"raw_translation_m", statisticsJson(ate.raw_translation)},
-                     {"raw_rotation_deg", statisticsJson(ate.raw_rotation_deg)},
-                     {"aligned_translation_m", statisticsJson(ate.aligned_translation)},
-                     {"aligned_rotation_deg", statisticsJson(ate.aligned_rotation_deg)}};
+    report["ate"] = ateJson(ate);
     report["ate_rmse_m"] = ate.raw_translation.rmse;
     report["max_error_m"] = ate.raw_translation.max;
   }
