@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <unistd.h>
+
 #include "sim/sim_config.hpp"
 #include "sim_test_helpers.hpp"
 
