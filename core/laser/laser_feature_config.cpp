@@ -45,14 +45,22 @@ void readFeatureSection(const YamlFields& y, const YAML::Node& node, LaserFeatur
   const std::string ctx = "laser_features";
   y.requireMap(node, ctx,
                {"errors", "tilt_deg", "tilt_axis_deg", "yaw_error_deg", "systematic_scale", "max_incidence_deg",
-                "corners", "corner_split_search", "corner_max_rms_ratio", "corner_junction_distance",
-                "segmentation"});
+                "outlier_sigmas", "outlier_run_length", "outlier_run_sigmas", "outlier_end_run_length",
+                "outlier_end_sigmas", "outlier_max_fraction", "residual_gate", "corners", "corner_split_search",
+                "corner_max_rms_ratio", "corner_junction_distance", "segmentation"});
   if (y.has(node, "errors")) readRangeErrors(y, node["errors"], ctx + ".errors", c.errors, true);
   c.errors.tilt = deg2rad(y.number(node, "tilt_deg", ctx, rad2deg(c.errors.tilt), -45.0, 45.0));
   c.errors.tilt_axis = deg2rad(y.number(node, "tilt_axis_deg", ctx, rad2deg(c.errors.tilt_axis), -360.0, 360.0));
   c.errors.yaw_error = deg2rad(y.number(node, "yaw_error_deg", ctx, rad2deg(c.errors.yaw_error), -45.0, 45.0));
   c.errors.systematic_scale = y.number(node, "systematic_scale", ctx, c.errors.systematic_scale, 0.0, 100.0);
   c.fit.max_incidence = deg2rad(y.number(node, "max_incidence_deg", ctx, rad2deg(c.fit.max_incidence), 1.0, 89.9));
+  c.outlier_sigmas = y.number(node, "outlier_sigmas", ctx, c.outlier_sigmas, 1.0, 1000.0);
+  c.outlier_run_length = y.integer(node, "outlier_run_length", ctx, c.outlier_run_length, 1, 100000);
+  c.outlier_run_sigmas = y.number(node, "outlier_run_sigmas", ctx, c.outlier_run_sigmas, 0.5, 1000.0);
+  c.outlier_end_run_length = y.integer(node, "outlier_end_run_length", ctx, c.outlier_end_run_length, 1, 100000);
+  c.outlier_end_sigmas = y.number(node, "outlier_end_sigmas", ctx, c.outlier_end_sigmas, 0.5, 1000.0);
+  c.outlier_max_fraction = y.number(node, "outlier_max_fraction", ctx, c.outlier_max_fraction, 0.0, 0.9);
+  c.residual_gate = y.number(node, "residual_gate", ctx, c.residual_gate, 0.0, 0.999999);
   c.corners = y.boolean(node, "corners", ctx, c.corners);
   c.corner_split_search = y.integer(node, "corner_split_search", ctx, c.corner_split_search, 0, 100);
   c.corner_max_rms_ratio = y.number(node, "corner_max_rms_ratio", ctx, c.corner_max_rms_ratio, 1.0, 100.0);

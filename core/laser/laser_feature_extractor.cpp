@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "eval/chi_squared.hpp"
+
 namespace polarslam {
 namespace {
 
@@ -67,23 +69,140 @@ std::span<const double> segmentTimes(const std::vector<double>& t, const LineSeg
   return std::span<const double>(t).subspan(static_cast<size_t>(s.first), static_cast<size_t>(s.count()));
 }
 
-LineFeature toLineFeature(const LineFit& fit, const LineErrorBudget& budget, const ValidReadings& v,
-                          const LineSegment& s, double systematic_scale) {
-  LineFeature f;
-  f.source = FeatureSource::Laser;
-  f.alpha = fit.line.alpha;
-  f.d = fit.line.d;
-  f.cov = budget.filterCov(systematic_scale);
-  f.random_cov = budget.randomCov();
-  f.systematic_bound = budget.systematic_bound;
+/// The readings a line was finally fitted to (its segment without outliers), and the fit.
+struct FittedLine {
+  LineFit fit;
+  PolarReadingBuffer readings;
+  std::vector<double> times;
+  std::vector<int> original;  ///< beam index in the scan as received
+};
+
+double median(std::vector<double> v) {
+  const auto mid = v.begin() + static_cast<long>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+/// Indices of the readings that do not belong to the line: standardised deleted residuals
+/// (e_i − median)/√(1 − h_ii), h_ii the reading's leverage, beyond `outlier_sigmas` robust
+/// standard deviations (at least σ_r), and runs of at least `outlier_run_length` consecutive
+/// readings beyond `outlier_run_sigmas` on the same side — small objects on a wall (a door jamb,
+/// a pillar) shallower than the split threshold, which would otherwise tilt or shift the line.
+/// The leverage term keeps a line's end readings, which pull the fit towards themselves, from
+/// hiding.
+/// `fit` is either a fit to all the readings (deleted residuals, 1 − h_ii) or, with `predictive`,
+/// a fit to their central part (prediction residuals, 1 + h_ii): a neighbouring structure's
+/// readings at a segment's end tilt a fit to all readings enough to hide themselves.
+std::vector<size_t> outliers(const PolarReadings& r, const LineFit& fit, bool predictive, double range_sigma,
+                             const LaserFeatureConfig& c) {
+  const PolarLine& line = fit.line;
+  const double ca = std::cos(line.alpha), sa = std::sin(line.alpha);
+  const double sign = predictive ? 1.0 : -1.0;
+  std::vector<double> residual(r.size()), leverage_scale(r.size());
+  for (size_t i = 0; i < r.size(); ++i) {
+    const double cosi = ca * r.cos_bearing[i] + sa * r.sin_bearing[i];
+    const double sini = sa * r.cos_bearing[i] - ca * r.sin_bearing[i];
+    if (cosi <= 0.0) return {};  // the line does not face this reading: no test
+    const Vec2 h = lineRangeJacobian(line, cosi, sini);
+    residual[i] = r.range[i] - line.d / cosi;
+    leverage_scale[i] = 1.0 / std::sqrt(std::max(1.0 + sign * h.dot(fit.normal_inverse * h), 1e-3));
+  }
+  const double centre = median(residual);
+  std::vector<double> deviation(r.size());
+  for (size_t i = 0; i < r.size(); ++i) deviation[i] = (residual[i] - centre) * leverage_scale[i];
+  std::vector<double> magnitude(r.size());
+  for (size_t i = 0; i < r.size(); ++i) magnitude[i] = std::abs(deviation[i]);
+  const double scale = std::max(range_sigma, 1.4826 * median(magnitude));  // MAD → σ for Gaussian noise
+  std::vector<bool> bad(r.size(), false);
+  for (size_t i = 0; i < r.size(); ++i) bad[i] = magnitude[i] > c.outlier_sigmas * scale;
+  // Runs on one side of the line: anywhere, and shorter ones at the segment's ends, where the
+  // neighbouring structure's readings end up when the split threshold could not separate them.
+  auto runEnd = [&](size_t i, double sigmas) {
+    size_t j = i;
+    while (j < r.size() && magnitude[j] > sigmas * scale && deviation[j] * deviation[i] > 0.0) ++j;
+    return j;  // first reading after the run
+  };
+  for (size_t i = 0; i < r.size();) {
+    const size_t j = runEnd(i, c.outlier_run_sigmas);
+    if (static_cast<int>(j - i) >= c.outlier_run_length)
+      for (size_t k = i; k < j; ++k) bad[k] = true;
+    i = std::max(j, i + 1);
+  }
+  const size_t head = r.empty() ? 0 : runEnd(0, c.outlier_end_sigmas);
+  if (static_cast<int>(head) >= c.outlier_end_run_length)
+    for (size_t k = 0; k < head; ++k) bad[k] = true;
+  size_t tail = r.size();  // readings tail..n−1 form the run at the far end
+  while (tail > 0 && magnitude[tail - 1] > c.outlier_end_sigmas * scale && deviation[tail - 1] * deviation[r.size() - 1] > 0.0)
+    --tail;
+  if (static_cast<int>(r.size() - tail) >= c.outlier_end_run_length)
+    for (size_t k = tail; k < r.size(); ++k) bad[k] = true;
+  std::vector<size_t> out;
+  for (size_t i = 0; i < r.size(); ++i)
+    if (bad[i]) out.push_back(i);
+  return out;
+}
+
+/// Polar fit of a segment, refitted without outliers (at most `max_fraction` of the readings,
+/// `rounds` times). Returns a failed fit when the line does not hold.
+FittedLine fitLine(const ValidReadings& v, const LineSegment& s, double range_sigma, const LaserFeatureConfig& c) {
+  FittedLine f;
   const PolarReadings r = v.view();
-  f.endpoint_a = projectOntoLine(fit.line, r.point(static_cast<size_t>(s.first)));
-  f.endpoint_b = projectOntoLine(fit.line, r.point(static_cast<size_t>(s.last)));
-  f.num_points = s.count();
-  const int a = v.original[static_cast<size_t>(s.first)], b = v.original[static_cast<size_t>(s.last)];
-  f.first_index = std::min(a, b);
-  f.last_index = std::max(a, b);
+  f.readings.reserve(static_cast<size_t>(s.count()));
+  for (int i = s.first; i <= s.last; ++i) {
+    const auto k = static_cast<size_t>(i);
+    f.readings.push_back(r.bearing[k], r.range[k], r.cos_bearing[k], r.sin_bearing[k]);
+    f.times.push_back(v.time[k]);
+    f.original.push_back(v.original[k]);
+  }
+  f.fit = fitLinePolar(f.readings.view(), c.fit);
+  for (int round = 0; round < c.outlier_rounds && f.fit.ok(); ++round) {
+    // First round: judge every reading against a fit to the central 60% of the segment.
+    const size_t n = f.readings.size(), margin = n / 5;
+    LineFit reference = f.fit;
+    bool predictive = false;
+    if (round == 0 && n - 2 * margin >= static_cast<size_t>(c.segmentation.min_line_points)) {
+      const LineFit central = fitLinePolar(f.readings.view().sub(margin, n - 2 * margin), f.fit.line, c.fit);
+      if (central.ok()) {
+        reference = central;
+        predictive = true;
+      }
+    }
+    const std::vector<size_t> bad = outliers(f.readings.view(), reference, predictive, range_sigma, c);
+    if (bad.empty() || bad.size() > c.outlier_max_fraction * static_cast<double>(f.readings.size())) break;
+    if (static_cast<int>(f.readings.size() - bad.size()) < c.segmentation.min_line_points) break;
+    FittedLine kept;
+    const PolarReadings old = f.readings.view();
+    for (size_t i = 0, b = 0; i < old.size(); ++i) {
+      if (b < bad.size() && bad[b] == i) {
+        ++b;
+        continue;
+      }
+      kept.readings.push_back(old.bearing[i], old.range[i], old.cos_bearing[i], old.sin_bearing[i]);
+      kept.times.push_back(f.times[i]);
+      kept.original.push_back(f.original[i]);
+    }
+    kept.fit = fitLinePolar(kept.readings.view(), f.fit.line, c.fit);
+    if (!kept.fit.ok()) break;
+    f = std::move(kept);
+  }
   return f;
+}
+
+LineFeature toLineFeature(const FittedLine& f, const LineErrorBudget& budget, double systematic_scale) {
+  LineFeature l;
+  l.source = FeatureSource::Laser;
+  l.alpha = f.fit.line.alpha;
+  l.d = f.fit.line.d;
+  l.cov = budget.filterCov(systematic_scale);
+  l.random_cov = budget.randomCov();
+  l.systematic_bound = budget.systematic_bound;
+  const PolarReadings r = f.readings.view();
+  l.endpoint_a = projectOntoLine(f.fit.line, r.point(0));
+  l.endpoint_b = projectOntoLine(f.fit.line, r.point(r.size() - 1));
+  l.num_points = static_cast<int>(r.size());
+  l.first_index = std::min(f.original.front(), f.original.back());
+  l.last_index = std::max(f.original.front(), f.original.back());
+  return l;
 }
 
 struct CornerAttempt {
@@ -124,7 +243,21 @@ int bestJunction(const PolarReadings& r, const RightAngleCorner& corner, const L
 }  // namespace
 
 LaserFeatureExtractor::LaserFeatureExtractor(const LaserFeatureConfig& config)
-    : config_(config), model_(config.errors) {}
+    : config_(config), model_(config.errors) {
+  // Φ(z) = gate  ⇔  P(Z² ≤ z²) = 2·gate − 1.
+  if (config_.residual_gate > 0.5 && config_.residual_gate < 1.0)
+    gate_z_ = std::sqrt(chiSquaredQuantile(2.0 * config_.residual_gate - 1.0, 1.0));
+}
+
+double LaserFeatureExtractor::varianceFactor(double residual_rms, int n, int p) const {
+  const double k = n - p;
+  if (gate_z_ <= 0.0 || k < 1.0) return 1.0;
+  const double sigma = model_.rangeSigma();
+  const double chi2 = residual_rms * residual_rms * n / (sigma * sigma);
+  const double h = 2.0 / (9.0 * k);
+  const double quantile = k * std::pow(1.0 - h + gate_z_ * std::sqrt(h), 3);  // Wilson–Hilferty
+  return chi2 > quantile ? chi2 / k : 1.0;
+}
 
 FeatureSet LaserFeatureExtractor::extract(const LaserScan& scan, std::span<const double> break_bearings,
                                           const SensorMotion& motion, ExtractionDetails* details) const {
@@ -153,16 +286,19 @@ FeatureSet LaserFeatureExtractor::extract(const LaserScan& scan, std::span<const
       ++out.num_rejected;
       continue;
     }
-    const LineFit fit = fitLinePolar(segmentView(r, s), config_.fit);
-    if (!fit.ok()) {
+    const FittedLine line = fitLine(v, s, sigma, config_);
+    if (!line.fit.ok()) {
       ++out.num_rejected;
       continue;
     }
-    segment_fits[k] = fit;
-    const LineErrorBudget budget = lineErrorBudget(fit, segmentView(r, s), segmentTimes(v.time, s), model_, motion);
-    out.lines.push_back(toLineFeature(fit, budget, v, s, config_.errors.systematic_scale));
-    d.line_fits.push_back(fit);
+    segment_fits[k] = line.fit;
+    LineErrorBudget budget = lineErrorBudget(line.fit, line.readings.view(), line.times, model_, motion);
+    const double factor = varianceFactor(line.fit.residual_rms, static_cast<int>(line.readings.size()), 2);
+    budget.noise_cov *= factor;
+    out.lines.push_back(toLineFeature(line, budget, config_.errors.systematic_scale));
+    d.line_fits.push_back(line.fit);
     d.line_budgets.push_back(budget);
+    d.line_variance_factors.push_back(factor);
   }
   if (!config_.corners) return out;
 
@@ -199,9 +335,10 @@ FeatureSet LaserFeatureExtractor::extract(const LaserScan& scan, std::span<const
     const double tolerance = config_.corner_junction_distance + 3.0 * sigma + 2.0 * apex.norm() * spacing;
     if ((apex - end1).norm() > tolerance || (apex - end2).norm() > tolerance) continue;
 
-    const CornerErrorBudget budget =
+    CornerErrorBudget budget =
         cornerErrorBudget(best.fit, segmentView(r, best.arm1), segmentView(r, best.arm2),
                           segmentTimes(v.time, best.arm1), segmentTimes(v.time, best.arm2), model_, motion);
+    budget.noise_cov *= varianceFactor(best.fit.residual_rms, best.arm1.count() + best.arm2.count(), 3);
     CornerFeature f;
     f.source = FeatureSource::Laser;
     f.convex = best.fit.convex;

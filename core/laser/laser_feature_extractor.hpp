@@ -27,6 +27,17 @@ struct LaserFeatureConfig {
   LaserErrorParams errors = defaultLaserErrors();
   SegmentationParams segmentation;
   LineFitOptions fit;                   ///< max_incidence: readings beyond it are trimmed from a line
+  double outlier_sigmas = 3.0;          ///< readings this many robust σ (≥ σ_r) off the line are dropped,
+  int outlier_run_length = 3;           ///< and runs of this many readings on one side of the line
+  double outlier_run_sigmas = 1.5;      ///< beyond this many σ (a door jamb, a pillar on a wall),
+  int outlier_end_run_length = 2;       ///< and runs of this many at either end of the segment
+  double outlier_end_sigmas = 2.0;      ///< beyond this many σ ...
+  double outlier_max_fraction = 0.34;   ///< ... unless there are more than this fraction of them
+  int outlier_rounds = 2;               ///< drop-and-refit rounds
+  /// When a fit's range residuals are too large for σ_r (χ² test of SSE/σ_r² on n − p degrees
+  /// of freedom at this probability), its random covariance is scaled by the a-posteriori
+  /// variance factor SSE/((n − p)·σ_r²). 0 turns the test off.
+  double residual_gate = 0.999;
   bool corners = true;                  ///< fit right-angle corners to perpendicular neighbours
   int corner_split_search = 2;          ///< try moving the arms' junction by up to this many readings
   double corner_max_rms_ratio = 2.0;    ///< corner fit RMS ≤ this × max(arm line RMS, σ_r)
@@ -46,6 +57,7 @@ struct ExtractionDetails {
   int valid_readings = 0;
   Segmentation segmentation;
   std::vector<LineFit> line_fits;              ///< one per output line
+  std::vector<double> line_variance_factors;   ///< one per output line (1 = residuals as σ_r predicts)
   std::vector<LineErrorBudget> line_budgets;   ///< one per output line
   std::vector<CornerFit> corner_fits;          ///< one per output corner
   std::vector<CornerErrorBudget> corner_budgets;
@@ -65,9 +77,14 @@ class LaserFeatureExtractor {
   const LaserFeatureConfig& config() const { return config_; }
   const LaserErrorModel& errorModel() const { return model_; }
 
+  /// A-posteriori variance factor of a fit with n readings and p parameters: SSE/((n − p)·σ_r²)
+  /// when SSE/σ_r² fails the χ²(n − p) test at config().residual_gate, otherwise 1.
+  double varianceFactor(double residual_rms, int n, int p) const;
+
  private:
   LaserFeatureConfig config_;
   LaserErrorModel model_;
+  double gate_z_ = 0.0;  ///< standard normal quantile of residual_gate (Wilson–Hilferty χ² quantiles)
 };
 
 }  // namespace polarslam

@@ -13,7 +13,8 @@ namespace polarslam {
 
 struct SegmentationParams {
   int min_line_points = 6;           ///< fewer readings: not a line
-  double min_line_length = 0.10;     ///< m, between the first and the last reading
+  double min_line_length = 0.30;     ///< m, between the first and the last reading (shorter lines
+                                     ///< next to small structures are not reliably consistent)
   double split_distance = 0.02;      ///< m: split when a reading is farther from the chord than this
   double split_sigmas = 3.0;         ///<   plus this many range σ
   double break_angle = deg2rad(10);  ///< λ of the adaptive breakpoint detector (Borges & Aldon)

@@ -1,0 +1,27 @@
+#pragma once
+// Command-line options of the laser feature extractor, shared by polarslam-features and
+// `polarslam features`: a YAML file (robot file or config/laser-features.yaml) plus overrides.
+#include <CLI/CLI.hpp>
+
+#include <optional>
+#include <string>
+
+#include "laser/laser_feature_extractor.hpp"
+
+namespace polarslam {
+
+class LaserFeatureOptions {
+ public:
+  /// Adds --config and the error-model overrides to `app`.
+  void add(CLI::App& app);
+  /// The configuration: the YAML file (if any), then every override given on the command line.
+  LaserFeatureConfig resolve() const;
+
+ private:
+  std::string config_;
+  std::optional<double> noise_sigma_, quantum_, scan_bias_sigma_, fixed_bias_, growth_, incidence_, tilt_deg_,
+      tilt_axis_deg_, yaw_error_deg_, systematic_scale_;
+  bool no_corners_ = false;
+};
+
+}  // namespace polarslam
