@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "common/lcm_decode.hpp"
+
 namespace polarslam {
 
 struct LogEvent {
@@ -18,7 +20,7 @@ struct LogEvent {
   /// Decodes the payload as MsgT; false when it is not one (wrong type or truncated).
   template <typename MsgT>
   bool decode(MsgT& msg) const {
-    return msg.decode(data.data(), 0, static_cast<int>(data.size())) >= 0;
+    return decodeLcm(msg, data.data(), data.size());
   }
 };
 

@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "common/lcm_decode.hpp"
+
 namespace polarslam {
 
 int64_t nowUtime();
@@ -44,7 +46,7 @@ class ProcessContext {
     sub->context = this;
     sub->raw = [this, handler, channel](const lcm::ReceiveBuffer* rbuf) {
       MsgT msg;
-      if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) {
+      if (!decodeLcm(msg, rbuf->data, rbuf->data_size)) {
         reject(channel + ": message does not decode as " + MsgT::getTypeName());
         return;
       }
