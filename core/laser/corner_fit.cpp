@@ -222,12 +222,14 @@ CornerErrorBudget cornerErrorBudget(const CornerFit& fit, const PolarReadings& a
   const std::span<const double> times[2] = {times1, times2};
   // Shortest range over the whole corner: the reference of the distance-growing error.
   double r_min = std::numeric_limits<double>::infinity();
-  forEachReading(corner, arm1, arm2, [&](int, size_t, double, double d, double c, double) { r_min = std::min(r_min, d / c); });
+  if (model.params().range.growth != 0.0)
+    forEachReading(corner, arm1, arm2, [&](int, size_t, double, double d, double c, double) { r_min = std::min(r_min, d / c); });
   RangeErrorSums<3> sums;
-  forEachReading(corner, arm1, arm2, [&](int arm, size_t i, double alpha, double d, double c, double s) {
+  forEachReading(corner, arm1, arm2, [&](int arm, size_t i, double, double d, double c, double s) {
+    const PolarReadings& r = arm == 0 ? arm1 : arm2;
+    const ReadingGeometry g{d, r.cos_bearing[i], r.sin_bearing[i], c, s, d / c};
     sums.add(cornerRow(corner, arm, c, s),
-             readingPerturbations(model, alpha, d, (arm == 0 ? arm1 : arm2).bearing[i], d / c, r_min,
-                                  timed ? times[arm][i] : 0.0, effective_motion));
+             readingPerturbations(model, g, r_min, timed ? times[arm][i] : 0.0, effective_motion));
   });
   const Mat3 j = corner.observationJacobian();
   const SourceErrors<3> e = projectSourceErrors<3, 3>(sums, fit.normal_inverse, j, model.params(),

@@ -35,6 +35,9 @@ LaserErrorModel::LaserErrorModel(const LaserErrorParams& params) : params_(param
   const double sigma = std::sqrt(quantizer_variance + params.output_noise_sigma * params.output_noise_sigma);
   range_sigma_ = std::max(sigma, params.min_range_sigma);
   quantization_amplitude_ = quantizationBiasAmplitude(r.quantum, r.noise_sigma);
+  max_incidence_tan_ = std::tan(std::clamp(r.max_incidence, 0.0, 1.5707));
+  tilt_axis_cos_ = std::cos(params.tilt_axis);
+  tilt_axis_sin_ = std::sin(params.tilt_axis);
 }
 
 double incidenceAnglePerturbation(double alpha, double bearing, double w, double max_incidence) {
@@ -64,21 +67,31 @@ double motionPerturbation(double alpha, double d, double bearing, double time, c
   return -normal_shift / c - d * s / (c * c) * turn;
 }
 
-ReadingPerturbations readingPerturbations(const LaserErrorModel& model, double alpha, double d, double bearing,
-                                          double range, double line_min_range, double time,
-                                          const SensorMotion& motion) {
+ReadingPerturbations readingPerturbations(const LaserErrorModel& model, const ReadingGeometry& g,
+                                          double line_min_range, double time, const SensorMotion& motion) {
   const LaserErrorParams& p = model.params();
+  const double c = g.cos_incidence, s = g.sin_incidence;
   ReadingPerturbations xi;
-  if (p.range.incidence != 0.0)
-    xi.incidence = incidenceAnglePerturbation(alpha, bearing, p.range.incidence, p.range.max_incidence);
-  if (p.range.growth != 0.0) xi.growth = distanceGrowthPerturbation(range, line_min_range, p.range.growth);
-  if (p.range.quantum > 0.0) {
-    xi.quantization_sin = quantizationPerturbation(range, p.range.quantum, model.quantizationAmplitude(), 0.0);
-    xi.quantization_cos =
-        quantizationPerturbation(range, p.range.quantum, model.quantizationAmplitude(), std::numbers::pi / 2.0);
+  if (p.range.incidence != 0.0)  // w|tan β|, |β| clamped   (2.8)
+    xi.incidence = p.range.incidence * std::min(std::abs(s / c), model.maxIncidenceTan());
+  if (p.range.growth != 0.0) xi.growth = distanceGrowthPerturbation(g.range, line_min_range, p.range.growth);
+  if (p.range.quantum > 0.0 && model.quantizationAmplitude() > 1e-7) {  // b·sin(θ), b·sin(θ + π/2)   (2.6)
+    const double theta = 2.0 * std::numbers::pi * (g.range - quantize(g.range, p.range.quantum)) / p.range.quantum;
+    xi.quantization_sin = model.quantizationAmplitude() * std::sin(theta);
+    xi.quantization_cos = model.quantizationAmplitude() * std::cos(theta);
   }
-  if (p.tilt != 0.0) xi.tilt = planeTiltPerturbation(alpha, bearing, range, p.tilt, p.tilt_axis);
-  if (!motion.isZero()) xi.motion = motionPerturbation(alpha, d, bearing, time, motion);
+  if (p.tilt == 0.0 && motion.isZero()) return xi;
+  // cos α, sin α of the line from α = β + φ.
+  const double ca = c * g.cos_bearing - s * g.sin_bearing, sa = s * g.cos_bearing + c * g.sin_bearing;
+  if (p.tilt != 0.0) {
+    const double cos_bearing_axis = g.cos_bearing * model.tiltAxisCos() + g.sin_bearing * model.tiltAxisSin();
+    const double cos_normal_axis = ca * model.tiltAxisCos() + sa * model.tiltAxisSin();
+    xi.tilt = g.range * 0.5 * p.tilt * p.tilt * (1.0 - cos_bearing_axis * cos_normal_axis / c);
+  }
+  if (!motion.isZero()) {
+    const double normal_shift = (ca * motion.vx + sa * motion.vy) * time;
+    xi.motion = -normal_shift / c - g.d * s / (c * c) * motion.omega * time;
+  }
   return xi;
 }
 

@@ -48,11 +48,16 @@ class LaserErrorModel {
   double rangeSigma() const { return range_sigma_; }
   /// b of (2.6), fitted numerically to (2.4).
   double quantizationAmplitude() const { return quantization_amplitude_; }
+  /// tan of the incidence clamp, and cos/sin of the tilt axis (for readingPerturbations).
+  double maxIncidenceTan() const { return max_incidence_tan_; }
+  double tiltAxisCos() const { return tilt_axis_cos_; }
+  double tiltAxisSin() const { return tilt_axis_sin_; }
 
  private:
   LaserErrorParams params_;
   double range_sigma_ = 0.0;
   double quantization_amplitude_ = 0.0;
+  double max_incidence_tan_ = 0.0, tilt_axis_cos_ = 1.0, tilt_axis_sin_ = 0.0;
 };
 
 // ---- Per-reading range perturbations ξ_i (true range error of one reading, metres) ----------
@@ -89,11 +94,19 @@ struct ReadingPerturbations {
   double incidence = 0.0, growth = 0.0, quantization_sin = 0.0, quantization_cos = 0.0, tilt = 0.0, motion = 0.0;
 };
 
-/// The perturbations of a reading at `bearing` hitting the line (α, d) at true range `range`;
-/// `line_min_range` is the line's shortest range, `time` the reading's time after the scan's
-/// reference time (ignored when the motion is zero).
-ReadingPerturbations readingPerturbations(const LaserErrorModel& model, double alpha, double d, double bearing,
-                                          double range, double line_min_range, double time,
-                                          const SensorMotion& motion);
+/// One reading hitting the line (α, d): cos/sin of its bearing φ and of the incidence α − φ,
+/// and its true range d / cos(α − φ).
+struct ReadingGeometry {
+  double d = 0.0;
+  double cos_bearing = 1.0, sin_bearing = 0.0;
+  double cos_incidence = 1.0, sin_incidence = 0.0;
+  double range = 0.0;
+};
+
+/// The perturbations above for one reading, without trigonometric calls (the same values as the
+/// per-source functions). `line_min_range` is the line's shortest range, `time` the reading's
+/// time after the scan's reference time (ignored when the motion is zero).
+ReadingPerturbations readingPerturbations(const LaserErrorModel& model, const ReadingGeometry& g,
+                                          double line_min_range, double time, const SensorMotion& motion);
 
 }  // namespace polarslam

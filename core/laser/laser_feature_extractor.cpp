@@ -77,9 +77,11 @@ struct FittedLine {
   std::vector<int> original;  ///< beam index in the scan as received
 };
 
-double median(std::vector<double> v) {
-  const auto mid = v.begin() + static_cast<long>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
+/// Median of `values`, using `scratch` as work space.
+double median(const std::vector<double>& values, std::vector<double>& scratch) {
+  scratch.assign(values.begin(), values.end());
+  const auto mid = scratch.begin() + static_cast<long>(scratch.size() / 2);
+  std::nth_element(scratch.begin(), mid, scratch.end());
   return *mid;
 }
 
@@ -107,12 +109,14 @@ std::vector<size_t> outliers(const PolarReadings& r, const LineFit& fit, bool pr
     residual[i] = r.range[i] - line.d / cosi;
     leverage_scale[i] = 1.0 / std::sqrt(std::max(1.0 + sign * h.dot(fit.normal_inverse * h), 1e-3));
   }
-  const double centre = median(residual);
-  std::vector<double> deviation(r.size());
+  std::vector<double> scratch;
+  scratch.reserve(r.size());
+  const double centre = median(residual, scratch);
+  std::vector<double>& deviation = residual;  // in place: (e_i − median)/√(1 ∓ h_ii)
   for (size_t i = 0; i < r.size(); ++i) deviation[i] = (residual[i] - centre) * leverage_scale[i];
-  std::vector<double> magnitude(r.size());
+  std::vector<double>& magnitude = leverage_scale;  // in place: |deviation|
   for (size_t i = 0; i < r.size(); ++i) magnitude[i] = std::abs(deviation[i]);
-  const double scale = std::max(range_sigma, 1.4826 * median(magnitude));  // MAD → σ for Gaussian noise
+  const double scale = std::max(range_sigma, 1.4826 * median(magnitude, scratch));  // MAD → σ for Gaussian noise
   std::vector<bool> bad(r.size(), false);
   for (size_t i = 0; i < r.size(); ++i) bad[i] = magnitude[i] > c.outlier_sigmas * scale;
   // Runs on one side of the line: anywhere, and shorter ones at the segment's ends, where the
@@ -142,8 +146,11 @@ std::vector<size_t> outliers(const PolarReadings& r, const LineFit& fit, bool pr
   return out;
 }
 
-/// Polar fit of a segment, refitted without outliers (at most `max_fraction` of the readings,
-/// `rounds` times). Returns a failed fit when the line does not hold.
+/// Polar fit of a segment without its outliers. Round 1 judges every reading against a fit to
+/// the central 60% of the segment (so that a neighbouring structure's readings at an end cannot
+/// hide by tilting the fit); round 2 checks the inliers' own fit. At most `outlier_max_fraction`
+/// of the readings go, and at least min_line_points stay. Returns a failed fit when the line
+/// does not hold.
 FittedLine fitLine(const ValidReadings& v, const LineSegment& s, double range_sigma, const LaserFeatureConfig& c) {
   FittedLine f;
   const PolarReadings r = v.view();
@@ -154,24 +161,23 @@ FittedLine fitLine(const ValidReadings& v, const LineSegment& s, double range_si
     f.times.push_back(v.time[k]);
     f.original.push_back(v.original[k]);
   }
-  f.fit = fitLinePolar(f.readings.view(), c.fit);
-  for (int round = 0; round < c.outlier_rounds && f.fit.ok(); ++round) {
-    // First round: judge every reading against a fit to the central 60% of the segment.
-    const size_t n = f.readings.size(), margin = n / 5;
-    LineFit reference = f.fit;
-    bool predictive = false;
-    if (round == 0 && n - 2 * margin >= static_cast<size_t>(c.segmentation.min_line_points)) {
-      const LineFit central = fitLinePolar(f.readings.view().sub(margin, n - 2 * margin), f.fit.line, c.fit);
-      if (central.ok()) {
-        reference = central;
-        predictive = true;
-      }
-    }
+  const size_t n = f.readings.size(), margin = n / 5;
+  const bool use_centre = c.outlier_rounds > 0 && n - 2 * margin >= static_cast<size_t>(c.segmentation.min_line_points);
+  LineFit reference = use_centre ? fitLinePolar(f.readings.view().sub(margin, n - 2 * margin), c.fit) : LineFit{};
+  bool predictive = reference.ok();
+  if (!predictive) {
+    f.fit = fitLinePolar(f.readings.view(), c.fit);
+    reference = f.fit;
+  }
+  bool fitted = !predictive;  // f.fit holds the fit to f.readings
+  for (int round = 0; round < c.outlier_rounds && reference.ok(); ++round) {
     const std::vector<size_t> bad = outliers(f.readings.view(), reference, predictive, range_sigma, c);
-    if (bad.empty() || bad.size() > c.outlier_max_fraction * static_cast<double>(f.readings.size())) break;
-    if (static_cast<int>(f.readings.size() - bad.size()) < c.segmentation.min_line_points) break;
+    const bool acceptable = !bad.empty() && bad.size() <= c.outlier_max_fraction * static_cast<double>(n) &&
+                            static_cast<int>(f.readings.size() - bad.size()) >= c.segmentation.min_line_points;
+    if (!acceptable) break;
     FittedLine kept;
     const PolarReadings old = f.readings.view();
+    kept.readings.reserve(old.size());
     for (size_t i = 0, b = 0; i < old.size(); ++i) {
       if (b < bad.size() && bad[b] == i) {
         ++b;
@@ -181,10 +187,14 @@ FittedLine fitLine(const ValidReadings& v, const LineSegment& s, double range_si
       kept.times.push_back(f.times[i]);
       kept.original.push_back(f.original[i]);
     }
-    kept.fit = fitLinePolar(kept.readings.view(), f.fit.line, c.fit);
+    kept.fit = fitLinePolar(kept.readings.view(), reference.line, c.fit);
     if (!kept.fit.ok()) break;
     f = std::move(kept);
+    fitted = true;
+    reference = f.fit;
+    predictive = false;
   }
+  if (!fitted) f.fit = fitLinePolar(f.readings.view(), reference.line, c.fit);  // no outliers: fit them all
   return f;
 }
 

@@ -240,9 +240,9 @@ LineErrorBudget lineErrorBudget(const LineFit& fit, const PolarReadings& r, std:
   for (size_t i = 0; i < r.size(); ++i) {  // one pass: Σ h_i ξ_i for every source
     const Incidence inc = incidence(ca, sa, r, i);
     const double range = line.d / inc.c;
+    const ReadingGeometry g{line.d, r.cos_bearing[i], r.sin_bearing[i], inc.c, inc.s, range};
     sums.add(lineRangeJacobian(line, inc.c, inc.s),
-             readingPerturbations(model, line.alpha, line.d, r.bearing[i], range, r_min, timed ? times[i] : 0.0,
-                                  effective_motion));
+             readingPerturbations(model, g, r_min, timed ? times[i] : 0.0, effective_motion));
   }
   const SourceErrors<2> e = projectSourceErrors<2, 2>(sums, fit.normal_inverse, Mat2::Identity(), model.params(),
                                                       yawMisalignmentLineError(model.params().yaw_error));

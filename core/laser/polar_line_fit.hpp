@@ -57,8 +57,8 @@ PolarLine fitLineTotalLeastSquares(const PolarReadings& readings);
 
 struct LineFitOptions {
   int max_iterations = 20;
-  double angle_tolerance = 1e-10;     ///< rad: stop when |Δα| and |Δd| are both below tolerance
-  double distance_tolerance = 1e-10;  ///< m
+  double angle_tolerance = 1e-6;      ///< rad: stop when |Δα| and |Δd| are both below tolerance
+  double distance_tolerance = 1e-6;   ///< m (notes §16.3; the step taken then leaves ~1e-12)
   double max_incidence = 1.4;         ///< rad: fail if a beam meets the line at a larger |α − φ|
 };
 

@@ -351,6 +351,17 @@ TEST(LineErrors, BudgetSumsAbsoluteValuesAndBoundsAllSourcesTogether) {
                      budget.quantization.cwiseAbs() + budget.plane_tilt.cwiseAbs() + budget.yaw.cwiseAbs() +
                      budget.motion.cwiseAbs();
     EXPECT_NEAR((budget.systematic_bound - sum).norm(), 0.0, 1e-15);
+    // The budget's single pass gives the same numbers as each source's own function.
+    const PolarReadings v = readings.view();
+    auto same = [](const Vec2& a, const Vec2& b) { return (a - b).norm() <= 1e-9 * (1.0 + b.norm()) + 1e-15; };
+    EXPECT_TRUE(same(budget.fixed_bias, fixedBiasLineErrorGeneral(fit.line, v, p.range.fixed_bias)));
+    EXPECT_TRUE(same(budget.incidence, incidenceAngleLineError(fit.line, v, p.range.incidence, p.range.max_incidence)));
+    EXPECT_TRUE(same(budget.growth, distanceGrowthLineError(fit.line, v, p.range.growth)));
+    EXPECT_TRUE(same(budget.quantization,
+                     quantizationLineErrorBound(fit.line, v, p.range.quantum, model.quantizationAmplitude())));
+    EXPECT_TRUE(same(budget.plane_tilt, planeTiltLineError(fit.line, v, p.tilt, p.tilt_axis)));
+    EXPECT_TRUE(same(budget.motion, motionLineError(fit.line, v, times, motion)));
+    EXPECT_TRUE(budget.scan_bias_cov.isApprox(scanBiasCovarianceGeneral(fit.line, v, p.range.scan_bias_sigma), 1e-9));
     EXPECT_TRUE(budget.noise_cov.isApprox(fit.covariance(model.rangeSigma())));
     const Mat2 filter = budget.filterCov();
     EXPECT_NEAR(filter(0, 0), budget.randomCov()(0, 0) + std::pow(budget.systematic_bound.x(), 2), 1e-15);
