@@ -249,4 +249,96 @@ std::string fromLcm(const polarslam::features_t& msg, FeatureSet& out) {
   return {};
 }
 
+namespace {
+
+bool validKind(int8_t kind) { return kind >= 0 && kind <= 2; }
+
+}  // namespace
+
+polarslam::slam_map_t toLcm(const FeatureMap& map, int64_t seq) {
+  polarslam::slam_map_t msg;
+  msg.utime = map.utime;
+  msg.seq = seq;
+  msg.robot = toLcm(map.robot, "map", seq);
+  for (const MapFeature& f : map.features) {
+    polarslam::map_feature_t m;
+    m.id = f.id;
+    m.kind = static_cast<int8_t>(f.kind);
+    m.num_params = static_cast<int8_t>(parameterCount(f.kind));
+    for (int i = 0; i < 3; ++i) m.params[i] = f.params(i);
+    copyMatrix<3>(f.cov, m.cov);
+    m.endpoints[0] = f.endpoint_a.x();
+    m.endpoints[1] = f.endpoint_a.y();
+    m.endpoints[2] = f.endpoint_b.x();
+    m.endpoints[3] = f.endpoint_b.y();
+    m.observations = f.observations;
+    msg.features.push_back(m);
+  }
+  msg.num_features = static_cast<int32_t>(msg.features.size());
+  return msg;
+}
+
+std::string fromLcm(const polarslam::slam_map_t& msg, FeatureMap& out) {
+  if (!countMatches(msg.features, msg.num_features)) return "slam map: num_features disagrees with features";
+  if (msg.features.size() > 1000000) return "slam map: too many features";
+  FeatureMap map;
+  map.utime = msg.utime;
+  if (const std::string why = fromLcm(msg.robot, map.robot); !why.empty()) return "slam map: robot " + why;
+  for (const auto& m : msg.features) {
+    if (!validKind(m.kind)) return "slam map: unknown feature kind";
+    if (!finite({m.params[0], m.params[1], m.params[2], m.endpoints[0], m.endpoints[1], m.endpoints[2],
+                 m.endpoints[3]}) ||
+        !finiteMatrix<3>(m.cov))
+      return "slam map: non-finite feature";
+    MapFeature f;
+    f.id = m.id;
+    f.kind = static_cast<MapFeatureKind>(m.kind);
+    f.params = {m.params[0], m.params[1], m.params[2]};
+    f.cov = readMatrix<3>(m.cov);
+    f.endpoint_a = {m.endpoints[0], m.endpoints[1]};
+    f.endpoint_b = {m.endpoints[2], m.endpoints[3]};
+    f.observations = m.observations;
+    map.features.push_back(f);
+  }
+  out = std::move(map);
+  return {};
+}
+
+polarslam::scan_anchors_t toLcm(const ScanAnchors& anchors, int64_t seq) {
+  polarslam::scan_anchors_t msg;
+  msg.utime = anchors.utime;
+  msg.seq = seq;
+  msg.pose = toLcm(anchors.pose, "map", seq);
+  for (const AnchorObservation& a : anchors.anchors) {
+    polarslam::anchor_observation_t m;
+    m.feature_id = a.feature_id;
+    m.kind = static_cast<int8_t>(a.kind);
+    for (int i = 0; i < 3; ++i) m.z[i] = a.z(i);
+    copyMatrix<3>(a.cov, m.cov);
+    msg.anchors.push_back(m);
+  }
+  msg.num_anchors = static_cast<int32_t>(msg.anchors.size());
+  return msg;
+}
+
+std::string fromLcm(const polarslam::scan_anchors_t& msg, ScanAnchors& out) {
+  if (!countMatches(msg.anchors, msg.num_anchors)) return "scan anchors: num_anchors disagrees with anchors";
+  if (msg.anchors.size() > 100000) return "scan anchors: too many anchors";
+  ScanAnchors anchors;
+  anchors.utime = msg.utime;
+  if (const std::string why = fromLcm(msg.pose, anchors.pose); !why.empty()) return "scan anchors: pose " + why;
+  for (const auto& m : msg.anchors) {
+    if (!validKind(m.kind)) return "scan anchors: unknown feature kind";
+    if (!finite({m.z[0], m.z[1], m.z[2]}) || !finiteMatrix<3>(m.cov)) return "scan anchors: non-finite anchor";
+    AnchorObservation a;
+    a.feature_id = m.feature_id;
+    a.kind = static_cast<MapFeatureKind>(m.kind);
+    a.z = {m.z[0], m.z[1], m.z[2]};
+    a.cov = readMatrix<3>(m.cov);
+    anchors.anchors.push_back(a);
+  }
+  out = std::move(anchors);
+  return {};
+}
+
 }  // namespace polarslam

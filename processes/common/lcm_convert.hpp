@@ -6,11 +6,14 @@
 #include "geometry/features.hpp"
 #include "laser/laser_scan.hpp"
 #include "odometry/odometry_reading.hpp"
+#include "slam/feature_map.hpp"
 #include "sonar/sonar_targets.hpp"
 #include "polarslam/features_t.hpp"
 #include "polarslam/laser_scan_t.hpp"
 #include "polarslam/odometry_t.hpp"
 #include "polarslam/pose_t.hpp"
+#include "polarslam/scan_anchors_t.hpp"
+#include "polarslam/slam_map_t.hpp"
 #include "polarslam/sonar_targets_t.hpp"
 
 namespace polarslam {
@@ -29,6 +32,14 @@ std::string fromLcm(const polarslam::pose_t& msg, PoseStamped& out);
 
 polarslam::features_t toLcm(const FeatureSet& features);
 std::string fromLcm(const polarslam::features_t& msg, FeatureSet& out);
+
+/// SLAM_MAP. fromLcm checks counts, kinds and finiteness.
+polarslam::slam_map_t toLcm(const FeatureMap& map, int64_t seq = 0);
+std::string fromLcm(const polarslam::slam_map_t& msg, FeatureMap& out);
+
+/// SCAN_ANCHORS. fromLcm checks counts, kinds and finiteness.
+polarslam::scan_anchors_t toLcm(const ScanAnchors& anchors, int64_t seq = 0);
+std::string fromLcm(const polarslam::scan_anchors_t& msg, ScanAnchors& out);
 
 template <int N>
 void copyMatrix(const Eigen::Matrix<double, N, N>& m, double* out) {

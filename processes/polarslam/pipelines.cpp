@@ -1,10 +1,18 @@
 #include "pipelines.hpp"
 
+#include "slam/feature_slam_estimator.hpp"
+
 namespace polarslam {
 
 const std::map<std::string, PipelineFactory>& pipelines() {
   static const std::map<std::string, PipelineFactory> factories = {
       {"odometry", [](const PipelineOptions&) { return std::make_unique<OdometryEstimator>(); }},
+      {"ekf",
+       [](const PipelineOptions& o) -> std::unique_ptr<Estimator> {
+         const SlamSensors sensors = parseSlamSensors(o.sensors);
+         return std::make_unique<FeatureSlamEstimator>(
+             o.config.empty() ? configForRobot(SimConfig{}, sensors) : loadFeatureSlamConfig(o.config, sensors));
+       }},
   };
   return factories;
 }

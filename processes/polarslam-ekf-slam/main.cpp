@@ -1,0 +1,89 @@
+// polarslam-ekf-slam: ODOMETRY + FEATURES → SLAM_POSE (pose_t), SLAM_MAP (slam_map_t) and
+// SCAN_ANCHORS (scan_anchors_t, one per LASER scan) — EKF feature SLAM of thesis §3.5–§3.7.
+// All the work is core/slam/feature_slam.hpp; this only moves messages. LASER is read for its
+// time stamps only: each scan gets the anchors the grid process regenerates its pose from.
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+#include "common/lcm_convert.hpp"
+#include "common/process_context.hpp"
+#include "slam/feature_slam.hpp"
+#include "slam/feature_slam_estimator.hpp"
+
+using namespace polarslam;
+
+int main(int argc, char** argv) {
+  CLI::App app{"polarslam-ekf-slam: EKF SLAM with line, corner and point features"};
+  std::string url, config;
+  std::string odometry_channel = "ODOMETRY", features_channel = "FEATURES", laser_channel = "LASER",
+              pose_channel = "SLAM_POSE", map_channel = "SLAM_MAP", anchors_channel = "SCAN_ANCHORS";
+  double map_period = 1.0;
+  app.add_option("--config", config, "robot file or estimator file (see core/slam/feature_slam_estimator.hpp)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
+  app.add_option("--odometry-channel", odometry_channel)->capture_default_str();
+  app.add_option("--features-channel", features_channel)->capture_default_str();
+  app.add_option("--laser-channel", laser_channel, "scan time stamps for SCAN_ANCHORS ('' = none)")->capture_default_str();
+  app.add_option("--pose-channel", pose_channel)->capture_default_str();
+  app.add_option("--map-channel", map_channel)->capture_default_str();
+  app.add_option("--anchors-channel", anchors_channel)->capture_default_str();
+  app.add_option("--map-period", map_period, "s between SLAM_MAP messages (stream time)")->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    const FeatureSlamConfig cfg =
+        config.empty() ? configForRobot(SimConfig{}, SlamSensors::Fused) : loadFeatureSlamConfig(config, SlamSensors::Fused);
+    ProcessContext context("polarslam-ekf-slam", url);
+    FeatureSlam slam(cfg.slam);
+    int64_t pose_seq = 0, map_seq = 0, anchor_seq = 0, last_map_utime = 0;
+    const int64_t map_period_us = static_cast<int64_t>(map_period * 1e6);
+    auto publishOutputs = [&] {
+      for (const ScanAnchors& a : slam.takeAnchors()) context.publish(anchors_channel, toLcm(a, anchor_seq++));
+      slam.takePoses();  // the live pose below already includes them
+      slam.takeMatches();
+      const PoseStamped pose = slam.currentPose();
+      context.publish(pose_channel, toLcm(pose, "map", pose_seq++));
+      const FeatureMap map = slam.map();
+      if (map.utime - last_map_utime >= map_period_us) {
+        context.publish(map_channel, toLcm(map, map_seq++));
+        last_map_utime = map.utime;
+      }
+    };
+    auto rejectIf = [&](const std::string& why) {
+      if (why.empty()) return false;
+      context.reject(why);
+      return true;
+    };
+    context.subscribe<polarslam::odometry_t>(odometry_channel, [&](const polarslam::odometry_t& msg) {
+      OdometryReading reading;
+      if (rejectIf(fromLcm(msg, reading)) || !context.checkSequence(odometry_channel, msg.seq)) return;
+      if (rejectIf(slam.addOdometry(reading))) return;
+      context.handled();
+      publishOutputs();
+    });
+    context.subscribe<polarslam::features_t>(features_channel, [&](const polarslam::features_t& msg) {
+      FeatureSet set;
+      if (rejectIf(fromLcm(msg, set)) || !context.checkSequence(features_channel, msg.seq)) return;
+      if (rejectIf(slam.addFeatures(set))) return;
+      context.handled();
+      publishOutputs();
+    });
+    if (!laser_channel.empty())
+      context.subscribe<polarslam::laser_scan_t>(laser_channel, [&](const polarslam::laser_scan_t& msg) {
+        if (!context.checkSequence(laser_channel, msg.seq)) return;
+        if (rejectIf(slam.requestAnchors(msg.utime))) return;
+        context.handled();
+        publishOutputs();
+      });
+    context.run();
+    slam.flush();
+    publishOutputs();
+    context.publish(map_channel, toLcm(slam.map(), map_seq++));
+  } catch (const std::exception& e) {
+    std::cerr << "polarslam-ekf-slam: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,85 @@
+// polarslam-fusion: LASER_FEATURES + SONAR (+ LASER for laser-aided sonar selection, + ODOMETRY to
+// move sonar cycles to the laser scan's time) → FEATURES in the robot base frame (thesis §3.3).
+// All the work is core/sonar/feature_fusion.hpp; this only moves messages.
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+#include "common/lcm_convert.hpp"
+#include "common/process_context.hpp"
+#include "sim/sim_config.hpp"
+#include "slam/feature_slam_estimator.hpp"
+#include "sonar/feature_fusion.hpp"
+
+using namespace polarslam;
+
+int main(int argc, char** argv) {
+  CLI::App app{"polarslam-fusion: laser and advanced-sonar features fused into FEATURES"};
+  std::string url, config, sensors = "fused";
+  std::string laser_features_channel = "LASER_FEATURES", sonar_channel = "SONAR", laser_channel = "LASER",
+              odometry_channel = "ODOMETRY", out_channel = "FEATURES";
+  app.add_option("--config", config, "robot file or estimator file (see core/slam/feature_slam_estimator.hpp)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--sensors", sensors, "laser | sonar | fused")->check(CLI::IsMember({"laser", "sonar", "fused"}))
+      ->capture_default_str();
+  app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
+  app.add_option("--laser-features-channel", laser_features_channel)->capture_default_str();
+  app.add_option("--sonar-channel", sonar_channel)->capture_default_str();
+  app.add_option("--laser-channel", laser_channel, "raw scans for laser-aided sonar selection")->capture_default_str();
+  app.add_option("--odometry-channel", odometry_channel)->capture_default_str();
+  app.add_option("--out-channel", out_channel)->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    const SlamSensors which = parseSlamSensors(sensors);
+    const FeatureSlamConfig cfg = config.empty() ? configForRobot(SimConfig{}, which) : loadFeatureSlamConfig(config, which);
+    ProcessContext context("polarslam-fusion", url);
+    FeatureFusion fusion(cfg.fusion);
+    int64_t out_seq = 0;
+    auto publishReady = [&] {
+      for (FeatureSet& set : fusion.takeReady()) {
+        set.seq = out_seq++;
+        context.publish(out_channel, toLcm(set));
+      }
+    };
+    context.subscribe<polarslam::features_t>(laser_features_channel, [&](const polarslam::features_t& msg) {
+      FeatureSet set;
+      if (const std::string why = fromLcm(msg, set); !why.empty()) return context.reject(why);
+      if (!context.checkSequence(laser_features_channel, msg.seq)) return;
+      if (!fusion.addLaserFeatures(set)) return context.reject("laser features: late or not in use");
+      context.handled();
+      publishReady();
+    });
+    context.subscribe<polarslam::sonar_targets_t>(sonar_channel, [&](const polarslam::sonar_targets_t& msg) {
+      SonarScan scan;
+      if (const std::string why = fromLcm(msg, scan); !why.empty()) return context.reject(why);
+      if (!context.checkSequence(sonar_channel, msg.seq)) return;
+      if (!fusion.addSonar(scan)) return context.reject("sonar: late or not in use");
+      context.handled();
+      publishReady();
+    });
+    context.subscribe<polarslam::laser_scan_t>(laser_channel, [&](const polarslam::laser_scan_t& msg) {
+      LaserScan scan;
+      if (const std::string why = fromLcm(msg, scan); !why.empty()) return context.reject(why);
+      if (!context.checkSequence(laser_channel, msg.seq)) return;
+      fusion.addLaserScan(scan);
+      context.handled();
+      publishReady();
+    });
+    context.subscribe<polarslam::odometry_t>(odometry_channel, [&](const polarslam::odometry_t& msg) {
+      OdometryReading reading;
+      if (const std::string why = fromLcm(msg, reading); !why.empty()) return context.reject(why);
+      if (!context.checkSequence(odometry_channel, msg.seq)) return;
+      if (!fusion.addOdometry(reading)) return context.reject("odometry: out of order");
+      context.handled();
+      publishReady();
+    });
+    context.run();
+    fusion.flush();
+    publishReady();
+  } catch (const std::exception& e) {
+    std::cerr << "polarslam-fusion: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,307 @@
+// bench_slam: EKF feature SLAM with laser only, sonar only and fused (thesis §3.8, notes §19.2).
+//  1. The thesis's claim: in a world with glass walls, sound-absorbing partitions and a long
+//     corridor with only small features, each seed's simulated run is fed to the three
+//     configurations at once (same sensor data); ATE, maximum error, map size and whether the run
+//     succeeded (bounded error and a closed loop) are printed per configuration, and the seeds
+//     where fused succeeds while a single-sensor run fails are counted.
+//  2. Filter consistency: the average NEES of the robot pose of the fused runs against the 95% χ²
+//     bounds of an average over that many Monte Carlo runs.
+//  3. Speed: time per EKF update (association + update) with 100, 300 and 1000 map features, and
+//     each configuration's whole-run speed as a multiple of real time.
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <numeric>
+#include <random>
+#include <sstream>
+
+#include "eval/ate.hpp"
+#include "eval/nees.hpp"
+#include "eval/trajectory_lookup.hpp"
+#include "io/tum.hpp"
+#include "sim/simulator.hpp"
+#include "slam/feature_slam_estimator.hpp"
+
+using namespace polarslam;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Options {
+  std::string world = std::string(POLARSLAM_SOURCE_DIR) + "/config/worlds/office.yaml";
+  std::string robot = std::string(POLARSLAM_SOURCE_DIR) + "/config/robots/default.yaml";
+  int seeds = 20;
+  uint64_t first_seed = 1;
+  double seconds = 0.0;           ///< 0 = until the path ends
+  double max_error_limit = 0.5;   ///< m: a run whose position error ever exceeds this failed
+  std::string out;
+  bool claim = true, speed = true;
+};
+
+/// One estimator fed from the simulator, with the wall time spent inside it.
+struct TimedEstimator {
+  SlamSensors sensors;
+  std::unique_ptr<FeatureSlamEstimator> estimator;
+  double seconds = 0.0;
+};
+
+class Fanout : public SimSink {
+ public:
+  explicit Fanout(std::vector<TimedEstimator>& estimators) : estimators_(estimators) {}
+  void onLaser(const LaserScan& scan) override {
+    each([&](Estimator& e) { e.onLaser(scan); });
+  }
+  void onSonar(const SonarScan& scan) override {
+    each([&](Estimator& e) { e.onSonar(scan); });
+  }
+  void onOdometry(const OdometryReading& odometry) override {
+    each([&](Estimator& e) { e.onOdometry(odometry); });
+  }
+  void onGroundTruth(const PoseStamped& pose) override { truth.push_back(pose); }
+  std::vector<PoseStamped> truth;
+
+ private:
+  template <typename Call>
+  void each(Call&& call) {
+    for (TimedEstimator& t : estimators_) {
+      const auto start = Clock::now();
+      call(*t.estimator);
+      t.seconds += std::chrono::duration<double>(Clock::now() - start).count();
+    }
+  }
+  std::vector<TimedEstimator>& estimators_;
+};
+
+struct RunResult {
+  double ate_rmse = 0.0, max_error = 0.0, final_error = 0.0;
+  size_t map_size = 0;
+  bool loop_closed = false;
+  bool success = false;
+  double realtime_factor = 0.0;
+  std::vector<double> nees;  ///< robot pose NEES at 1 Hz
+};
+
+std::vector<PoseStamped> inStartFrame(std::vector<PoseStamped> poses) {
+  if (poses.empty()) return poses;
+  const Pose2 inverse = poses.front().pose.inverse();
+  for (auto& p : poses) p.pose = inverse * p.pose;
+  return poses;
+}
+
+RunResult evaluate(FeatureSlamEstimator& e, const std::vector<PoseStamped>& truth, double run_seconds,
+                   double wall_seconds, const Options& o) {
+  RunResult r;
+  const auto& estimate = e.trajectory();
+  const AteResult ate = evaluateAte(estimate, truth);
+  r.ate_rmse = ate.raw_translation.rmse;
+  r.max_error = ate.raw_translation.max;
+  const TrajectoryLookup lookup(truth);
+  if (!estimate.empty())
+    if (const auto end = lookup.interpolate(estimate.back().utime, 100000))
+      r.final_error = (end->translation() - estimate.back().pose.translation()).norm();
+  r.map_size = e.slam().map().features.size();
+  // Loop closed: a feature seen early in the run is matched again in its last fifth.
+  const int64_t t0 = truth.front().utime, t1 = truth.back().utime;
+  for (const auto& [utime, id] : e.revisits())
+    if (utime >= t1 - (t1 - t0) / 5) r.loop_closed = true;
+  r.success = r.loop_closed && r.max_error <= o.max_error_limit;
+  r.realtime_factor = wall_seconds > 0 ? run_seconds / wall_seconds : 0.0;
+  int64_t next = t0 + 1'000'000;
+  for (const PoseStamped& p : estimate) {
+    if (p.utime < next) continue;
+    next += 1'000'000;
+    if (const auto t = lookup.interpolate(p.utime, 30000)) {
+      try {
+        r.nees.push_back(poseNees(p.pose, p.cov, *t));
+      } catch (const std::invalid_argument&) {
+      }
+    }
+  }
+  return r;
+}
+
+struct Row {
+  std::vector<RunResult> runs;
+};
+
+double mean(const std::vector<double>& v) { return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / v.size(); }
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+void runClaim(const Options& o) {
+  const World world = loadWorld(o.world);
+  const SimConfig robot = loadSimConfig(o.robot);
+  const std::vector<SlamSensors> configs = {SlamSensors::Laser, SlamSensors::Sonar, SlamSensors::Fused};
+  std::map<SlamSensors, Row> rows;
+  int fused_wins = 0;
+  std::printf("world %s, robot %s, %d seeds from %llu\n", o.world.c_str(), o.robot.c_str(), o.seeds,
+              static_cast<unsigned long long>(o.first_seed));
+  std::printf("%6s %8s | %-28s | %-28s | %-28s\n", "seed", "seconds", "laser: ATE max map loop", "sonar: ATE max map loop",
+              "fused: ATE max map loop");
+  for (int k = 0; k < o.seeds; ++k) {
+    const uint64_t seed = o.first_seed + static_cast<uint64_t>(k);
+    std::vector<TimedEstimator> estimators;
+    for (SlamSensors s : configs)
+      estimators.push_back({s, std::make_unique<FeatureSlamEstimator>(configForRobot(robot, s)), 0.0});
+    Fanout sink(estimators);
+    Simulator sim(world, robot, seed);
+    const double limit = o.seconds > 0 ? o.seconds : 3600.0;
+    while (sim.time() < limit && !sim.finished()) sim.step(sink);
+    const std::vector<PoseStamped> truth = inStartFrame(sink.truth);
+    std::printf("%6llu %8.1f |", static_cast<unsigned long long>(seed), sim.time());
+    std::map<SlamSensors, bool> success;
+    for (TimedEstimator& t : estimators) {
+      const auto start = Clock::now();
+      nlohmann::json report;
+      std::string dir;
+      if (!o.out.empty() && k == 0) {
+        dir = (std::filesystem::path(o.out) / toString(t.sensors)).string();
+        std::filesystem::create_directories(dir);
+      }
+      t.estimator->finish(dir, report);
+      t.seconds += std::chrono::duration<double>(Clock::now() - start).count();
+      if (!dir.empty()) writeTumTrajectory(dir + "/trajectory.tum", t.estimator->trajectory());
+      const RunResult r = evaluate(*t.estimator, truth, sim.time(), t.seconds, o);
+      rows[t.sensors].runs.push_back(r);
+      success[t.sensors] = r.success;
+      std::printf(" %6.3f %6.3f %4zu %-3s %s |", r.ate_rmse, r.max_error, r.map_size, r.loop_closed ? "yes" : "no",
+                  r.success ? "ok  " : "FAIL");
+    }
+    const bool win = success[SlamSensors::Fused] && (!success[SlamSensors::Laser] || !success[SlamSensors::Sonar]);
+    fused_wins += win;
+    std::printf("%s\n", win ? " fused succeeds where a single sensor fails" : "");
+    std::fflush(stdout);
+  }
+
+  std::printf("\nsummary over %d seeds (success: loop closed and max error <= %.2f m)\n", o.seeds, o.max_error_limit);
+  std::printf("%-7s %10s %10s %10s %10s %10s %10s %10s\n", "sensors", "ATE mean", "ATE med", "max mean", "max worst",
+              "map size", "success", "x realtime");
+  for (SlamSensors s : configs) {
+    const auto& runs = rows[s].runs;
+    std::vector<double> ate, max_error, map_size, speed;
+    int ok = 0;
+    for (const RunResult& r : runs) {
+      ate.push_back(r.ate_rmse);
+      max_error.push_back(r.max_error);
+      map_size.push_back(static_cast<double>(r.map_size));
+      speed.push_back(r.realtime_factor);
+      ok += r.success;
+    }
+    std::printf("%-7s %10.3f %10.3f %10.3f %10.3f %10.1f %7d/%-2zu %10.1f\n", toString(s), mean(ate), median(ate),
+                mean(max_error), *std::max_element(max_error.begin(), max_error.end()), mean(map_size), ok, runs.size(),
+                mean(speed));
+  }
+  std::printf("fused succeeds where laser-only or sonar-only fails: %d of %d seeds\n", fused_wins, o.seeds);
+
+  // Consistency of the fused filter: NEES averaged over the runs at each second.
+  std::vector<std::vector<double>> nees;
+  size_t steps = std::numeric_limits<size_t>::max();
+  for (const RunResult& r : rows[SlamSensors::Fused].runs) steps = std::min(steps, r.nees.size());
+  for (const RunResult& r : rows[SlamSensors::Fused].runs)
+    nees.emplace_back(r.nees.begin(), r.nees.begin() + static_cast<std::ptrdiff_t>(steps));
+  if (steps > 0 && steps != std::numeric_limits<size_t>::max()) {
+    const NeesSummary n = summarizeNees(nees, 3, 0.95);
+    std::printf("\nfused robot-pose NEES over %zu runs x %zu s: average %.2f, 95%% bounds of a %zu-run average [%.2f, %.2f] "
+                "-> %s; seconds whose run-average lies inside: %.0f%%\n",
+                nees.size(), steps, n.average, nees.size(), n.step_interval.lower, n.step_interval.upper,
+                n.average >= n.step_interval.lower && n.average <= n.step_interval.upper ? "inside" : "OUTSIDE",
+                100.0 * n.fraction_steps_inside);
+  }
+}
+
+// ---- Speed -----------------------------------------------------------------------------------------
+
+/// A map of n point features on a grid around the robot, then timed updates that each observe
+/// the 12 features nearest to the robot (association over all n features + batch update).
+void timeUpdates(int n) {
+  FeatureSlamParams params;
+  params.confirm_observations = 1;
+  FeatureSlam slam(params);
+  std::mt19937_64 rng(n);
+  std::normal_distribution<double> noise(0.0, 0.005);
+  const int side = static_cast<int>(std::ceil(std::sqrt(n)));
+  std::vector<Vec2> points;
+  for (int i = 0; i < n; ++i) points.push_back({1.0 + 1.5 * (i % side) - 0.75 * side, 1.3 * (i / side) - 0.65 * side + 0.3});
+  OdometryReading o;
+  o.utime = 1'000'000;
+  slam.addOdometry(o);
+  FeatureSet all;
+  all.utime = o.utime;
+  for (const Vec2& p : points) {
+    PointFeature f;
+    f.x = p.x();
+    f.y = p.y();
+    f.cov = Mat2::Identity() * 2.5e-5;
+    all.points.push_back(f);
+  }
+  slam.addFeatures(all);
+  int updates = 0;
+  double seconds = 0.0;
+  for (int k = 1; k <= 40; ++k) {
+    o.utime += 100'000;
+    const double travel = 0.02 * k;
+    o.left_travel = o.right_travel = travel;
+    o.pose.x = travel;
+    slam.addOdometry(o);
+    std::vector<std::pair<double, Vec2>> nearest;
+    for (const Vec2& p : points) nearest.emplace_back((p - Vec2(travel, 0)).norm(), p);
+    std::partial_sort(nearest.begin(), nearest.begin() + 12, nearest.end(),
+                      [](const auto& a, const auto& b) { return a.first < b.first; });
+    FeatureSet set;
+    set.utime = o.utime;
+    for (int i = 0; i < 12; ++i) {
+      PointFeature f;
+      f.x = nearest[i].second.x() - travel + noise(rng);
+      f.y = nearest[i].second.y() + noise(rng);
+      f.cov = Mat2::Identity() * 2.5e-5;
+      set.points.push_back(f);
+    }
+    const double before = slam.stats().update_seconds;
+    slam.addFeatures(set);
+    o.utime += 1;
+    slam.addOdometry(o);  // lets the set through
+    seconds += slam.stats().update_seconds - before;
+    ++updates;
+  }
+  std::printf("%8d %10d %14.3f %14ld\n", static_cast<int>(slam.state().features().size()), slam.state().dimension(),
+              1e3 * seconds / updates, slam.stats().paired / std::max<long>(1, slam.stats().updates - 1));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"bench_slam: laser-only, sonar-only and fused EKF SLAM; consistency; speed"};
+  Options o;
+  bool speed_only = false, no_speed = false;
+  app.add_option("--world", o.world)->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--robot", o.robot)->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--seeds", o.seeds)->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--first-seed", o.first_seed)->capture_default_str();
+  app.add_option("--seconds", o.seconds, "simulated seconds per run (0 = until the path ends)")->capture_default_str();
+  app.add_option("--max-error", o.max_error_limit, "m: a run whose error ever exceeds this failed")->capture_default_str();
+  app.add_option("--out", o.out, "write map.json and trajectory.tum of the first seed per configuration here");
+  app.add_flag("--speed-only", speed_only, "only the update timing");
+  app.add_flag("--no-speed", no_speed, "skip the update timing");
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (!speed_only) runClaim(o);
+    if (!no_speed) {
+      std::printf("\ntime per EKF update (association over all features + batch update of 12 point observations)\n");
+      std::printf("%8s %10s %14s %14s\n", "features", "state dim", "ms / update", "paired/update");
+      for (int n : {100, 300, 1000}) timeUpdates(n);
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "bench_slam: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
