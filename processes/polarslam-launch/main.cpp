@@ -88,6 +88,7 @@ int main(int argc, char** argv) {
     if (!url.empty()) child_env["LCM_DEFAULT_URL"] = url;
     StatusPublisher status(resolveLcmUrl(url), host_label);
     RunLogs logs(run_dir.empty() ? defaultRunDir(host_label) : run_dir);
+    child_env["POLARSLAM_RUN_DIR"] = std::filesystem::absolute(logs.dir()).string();
     // Orphaned descendants come to the launcher instead of init, so none can outlive it unseen.
     prctl(PR_SET_CHILD_SUBREAPER, 1);
     const bool live_table = !no_tui && stdoutIsAScreen();

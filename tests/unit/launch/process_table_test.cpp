@@ -147,5 +147,11 @@ TEST(StatusView, TableShowsEveryCommand) {
   EXPECT_EQ(formatUptime(3723.9), "1:02:03");
 }
 
+TEST(StatusView, PrintableDropsTerminalControl) {
+  EXPECT_EQ(printable("\x1b[1;31mred\x1b[0m\tplain\r\x07"), "red plain");
+  EXPECT_EQ(printable("\x1b[2K\x1b[1Gline\x1b"), "line");
+  EXPECT_EQ(printable("caf\xc3\xa9 100%"), "caf\xc3\xa9 100%");
+}
+
 }  // namespace
 }  // namespace polarslam
