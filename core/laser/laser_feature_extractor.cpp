@@ -338,12 +338,16 @@ FeatureSet LaserFeatureExtractor::extract(const LaserScan& scan, std::span<const
     for (const LineFit* f : {&fit_a, &fit_b})
       if (f->ok()) arm_rms = std::max(arm_rms, f->residual_rms);
     if (best.fit.residual_rms > config_.corner_max_rms_ratio * arm_rms) continue;
-    // ... and its apex must be where the two arms meet.
+    // ... and its apex must be where the two arms' readings end: within the gap between their
+    // last readings (one beam spacing along each wall), not in the air between two objects.
     const Vec2 apex = best.fit.corner.apex();
-    const Vec2 end1 = r.point(static_cast<size_t>(best.arm1.last)), end2 = r.point(static_cast<size_t>(best.arm2.first));
-    const double spacing = std::abs(r.bearing[static_cast<size_t>(best.arm2.first)] - r.bearing[static_cast<size_t>(best.arm1.last)]);
-    const double tolerance = config_.corner_junction_distance + 3.0 * sigma + 2.0 * apex.norm() * spacing;
-    if ((apex - end1).norm() > tolerance || (apex - end2).norm() > tolerance) continue;
+    const auto e1 = static_cast<size_t>(best.arm1.last), e2 = static_cast<size_t>(best.arm2.first);
+    const double gap = std::abs(r.bearing[e2] - r.bearing[e1]);
+    auto nearEnd = [&](size_t e, const PolarLine& arm) {
+      const double along_wall = r.range[e] * gap / std::max(std::cos(arm.alpha - r.bearing[e]), 0.2);
+      return (apex - r.point(e)).norm() <= along_wall + 3.0 * sigma + config_.corner_junction_distance;
+    };
+    if (!nearEnd(e1, best.fit.corner.arm1()) || !nearEnd(e2, best.fit.corner.arm2())) continue;
 
     CornerErrorBudget budget =
         cornerErrorBudget(best.fit, segmentView(r, best.arm1), segmentView(r, best.arm2),

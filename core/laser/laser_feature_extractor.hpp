@@ -41,7 +41,8 @@ struct LaserFeatureConfig {
   bool corners = true;                  ///< fit right-angle corners to perpendicular neighbours
   int corner_split_search = 2;          ///< try moving the arms' junction by up to this many readings
   double corner_max_rms_ratio = 2.0;    ///< corner fit RMS ≤ this × max(arm line RMS, σ_r)
-  double corner_junction_distance = 0.10;  ///< m (+3σ_r + 2 beam spacings): apex to the arms' ends
+  /// m: the apex may lie this far (+3σ_r + one beam spacing along each arm) from each arm's end
+  double corner_junction_distance = 0.02;
 };
 
 /// Reads the configuration from YAML. Either file kind works:
