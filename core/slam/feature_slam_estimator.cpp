@@ -1,9 +1,11 @@
 #include "slam/feature_slam_estimator.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
 
+#include "grid/grid_outputs.hpp"
 #include "sim/yaml_fields.hpp"
 #include "sonar/feature_frames.hpp"
 
@@ -174,6 +176,7 @@ FeatureSlamEstimator::FeatureSlamEstimator(FeatureSlamConfig config)
     : config_(std::move(config)), extractor_(config_.laser), fusion_(config_.fusion), slam_(config_.slam) {}
 
 void FeatureSlamEstimator::onOdometry(const OdometryReading& odometry) {
+  if (std::isfinite(odometry.v) && std::isfinite(odometry.omega)) twist_ = {odometry.v, odometry.omega};
   fusion_.addOdometry(odometry);
   if (!slam_.addOdometry(odometry).empty()) ++rejected_;
   drain();
@@ -182,12 +185,15 @@ void FeatureSlamEstimator::onOdometry(const OdometryReading& odometry) {
 void FeatureSlamEstimator::onLaser(const LaserScan& scan) {
   ++laser_scans_;
   if (!slam_.requestAnchors(scan.utime).empty()) ++rejected_;
+  else grid_scans_.addScan(scan);
   if (config_.sensors != SlamSensors::Sonar) {
     std::vector<double> hints;
     if (config_.sonar_break_hints && config_.sensors == SlamSensors::Fused)
       for (const BreakHint& h : fusion_.breakHints(scan)) hints.push_back(h.bearing);
     fusion_.addLaserScan(scan);
-    fusion_.addLaserFeatures(extractor_.extract(scan, hints));
+    // Motion during the scan enters the lines' systematic error bound (thesis §2.3.9).
+    fusion_.addLaserFeatures(
+        extractor_.extract(scan, hints, sensorMotionFromBaseTwist(scan.laser_pose, twist_.x(), twist_.y())));
   }
   drain();
 }
@@ -202,7 +208,10 @@ void FeatureSlamEstimator::drain() {
   for (const FeatureSet& set : fusion_.takeReady())
     if (!slam_.addFeatures(set).empty()) ++rejected_;
   for (PoseStamped& p : slam_.takePoses()) trajectory_.push_back(p);
-  for (ScanAnchors& a : slam_.takeAnchors()) anchors_.push_back(std::move(a));
+  for (ScanAnchors& a : slam_.takeAnchors()) {
+    grid_scans_.addAnchors(a);
+    anchors_.push_back(std::move(a));
+  }
   const int64_t revisit_us = static_cast<int64_t>(kRevisitAfterSeconds * 1e6);
   for (const auto& [utime, id] : slam_.takeMatches()) {
     auto [it, fresh] = last_seen_.try_emplace(id, utime);
@@ -226,6 +235,7 @@ void FeatureSlamEstimator::finish(const std::string& out_dir, nlohmann::json& re
   if (!out_dir.empty()) {
     std::ofstream file(std::filesystem::path(out_dir) / "map.json");
     file << featureMapJson(map);
+    writeGridOutputs(out_dir, grid_scans_, map, report);
   }
   std::map<std::string, int> counts{{"line", 0}, {"corner", 0}, {"point", 0}};
   for (const MapFeature& f : map.features) ++counts[kindName(f.kind)];

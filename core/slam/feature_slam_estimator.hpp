@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "grid/anchored_scan_store.hpp"
 #include "laser/laser_feature_extractor.hpp"
 #include "sim/sim_config.hpp"
 #include "slam/estimator.hpp"
@@ -59,7 +60,9 @@ class FeatureSlamEstimator : public Estimator {
   void onLaser(const LaserScan& scan) override;
   void onSonar(const SonarScan& scan) override;
   const std::vector<PoseStamped>& trajectory() const override { return trajectory_; }
-  /// Writes map.json into out_dir and adds map, filter and fusion figures to the report.
+  /// Writes map.json and the occupancy grid regenerated from the anchored scans
+  /// (map.{ot,bt,pgm,yaml,png}, core/grid) into out_dir and adds map, filter, fusion and grid
+  /// figures to the report.
   void finish(const std::string& out_dir, nlohmann::json& report) override;
 
   /// Processes whatever is still queued (finish() does this too).
@@ -67,6 +70,8 @@ class FeatureSlamEstimator : public Estimator {
   const FeatureSlam& slam() const { return slam_; }
   const FeatureFusion& fusion() const { return fusion_; }
   const std::vector<ScanAnchors>& anchors() const { return anchors_; }
+  /// Laser scans paired with their anchors, for the occupancy grid (bounded, see core/grid).
+  const AnchoredScanStore& gridScans() const { return grid_scans_; }
   const FeatureSlamConfig& config() const { return config_; }
   /// Ids of map features first matched again after `revisit_after_s` seconds away from them
   /// (a loop closure), in the order they happened.
@@ -81,8 +86,10 @@ class FeatureSlamEstimator : public Estimator {
   FeatureSlam slam_;
   std::vector<PoseStamped> trajectory_;
   std::vector<ScanAnchors> anchors_;
+  AnchoredScanStore grid_scans_;
   std::vector<std::pair<int64_t, int64_t>> revisits_;  ///< (utime, feature id)
   std::map<int64_t, int64_t> last_seen_;               ///< feature id → utime
+  Vec2 twist_ = Vec2::Zero();  ///< latest odometry (v, ω)
   long laser_scans_ = 0, sonar_scans_ = 0, rejected_ = 0;
 };
 
