@@ -320,12 +320,40 @@ std::optional<LinearizedObservation> FeatureSlam::linearize(int feature, const O
   return lin;
 }
 
-bool FeatureSlam::compatible(const FeatureInfo& info, const Observation& obs, double side) const {
+double FeatureSlam::viewAngle(const FeatureInfo& info, const Vec2& position) const {
+  const Vec2 to_robot = state_.pose().translation() - position;
+  return wrapAngle(std::atan2(to_robot.y(), to_robot.x()) - info.view_ref);
+}
+
+namespace {
+
+/// The direction `relative`, shifted by ±2π to where it lies closest to the arc [lo, hi], and
+/// its distance from the arc.
+std::pair<double, double> nearestOnArc(double lo, double hi, double relative) {
+  double best = relative, best_gap = std::numeric_limits<double>::infinity();
+  for (double shift : {0.0, 2.0 * std::numbers::pi, -2.0 * std::numbers::pi}) {
+    const double r = relative + shift, gap = std::max({0.0, lo - r, r - hi});
+    if (gap < best_gap) {
+      best_gap = gap;
+      best = r;
+    }
+  }
+  return {best, best_gap};
+}
+
+}  // namespace
+
+void FeatureSlam::widenView(FeatureInfo& info, double relative) {
+  const double r = nearestOnArc(info.view_lo, info.view_hi, relative).first;
+  info.view_lo = std::min(info.view_lo, r);
+  info.view_hi = std::max(info.view_hi, r);
+}
+
+bool FeatureSlam::compatible(const FeatureInfo& info, const Observation& obs, double side, const Vec2& position) const {
   if (info.kind != obs.kind) return false;
-  if (obs.kind == MapFeatureKind::Corner) return info.convex == obs.convex;
-  if (obs.kind != MapFeatureKind::Line) return true;
-  if (side != info.side) return false;
-  return true;
+  if (obs.kind == MapFeatureKind::Line) return side == info.side;
+  if (obs.kind == MapFeatureKind::Corner && info.convex != obs.convex) return false;
+  return nearestOnArc(info.view_lo, info.view_hi, viewAngle(info, position)).second <= params_.max_view_change;
 }
 
 void FeatureSlam::growExtent(FeatureInfo& info, const Vec2& map_line, const Observation& obs, const Pose2& pose) const {
@@ -358,7 +386,7 @@ void FeatureSlam::processFeatures(const FeatureSet& set) {
       if (features[j].kind != obs.kind) continue;
       double side = 1.0;
       const auto lin = linearize(static_cast<int>(j), obs, &side);
-      if (!lin || !compatible(info_[j], obs, side)) continue;
+      if (!lin || !compatible(info_[j], obs, side, state_.featureMean(static_cast<int>(j)).head<2>())) continue;
       const Vec3 feature_sigma = state_.featureCovariance(static_cast<int>(j)).diagonal().cwiseMax(0.0).cwiseSqrt();
       if (!passesQuickGate(*lin, robot_sigma, feature_sigma, new_gate)) continue;
       const double d2 = mahalanobis2(state_, *lin);
@@ -392,8 +420,11 @@ void FeatureSlam::processFeatures(const FeatureSet& set) {
         ++info.observations;
         info.last_utime = set.utime;
         matches_.emplace_back(set.utime, info.id);
+        const Vec2 y = state_.featureMean(pairs[k].feature).head<2>();
         if (info.kind == MapFeatureKind::Line)
-          growExtent(info, state_.featureMean(pairs[k].feature).head<2>(), observations[paired_obs[k]], updated);
+          growExtent(info, y, observations[paired_obs[k]], updated);
+        else
+          widenView(info, viewAngle(info, y));
       }
       stats_.paired += static_cast<long>(pairs.size());
     } else {
@@ -433,8 +464,9 @@ void FeatureSlam::handleUnmatched(const std::vector<const Observation*>& unmatch
     for (size_t k = 0; k < tentatives_.size(); ++k) {
       const Tentative& t = tentatives_[k];
       if (used[k] || t.info.kind != obs->kind) continue;
-      if (obs->kind == MapFeatureKind::Corner && t.info.convex != obs->convex) continue;
-      if (obs->kind == MapFeatureKind::Line && observeLine(pose, t.y.head<2>()).s != t.info.side) continue;
+      if (!compatible(t.info, *obs, obs->kind == MapFeatureKind::Line ? observeLine(pose, t.y.head<2>()).s : 1.0,
+                      t.y.head<2>()))
+        continue;
       const int n = obs->kind == MapFeatureKind::Corner && obs->dim == 3 && t.gamma_known ? 3 : 2;
       const Vec3 nu = observationDifference(obs->kind, init.y, t.y);
       const Eigen::MatrixXd S = (P_obs + t.P).topLeftCorner(n, n);
@@ -454,6 +486,10 @@ void FeatureSlam::handleUnmatched(const std::vector<const Observation*>& unmatch
       t.info.first_utime = t.info.last_utime = utime;
       t.info.convex = obs->convex;
       t.info.side = side;
+      if (obs->kind != MapFeatureKind::Line) {
+        const Vec2 to_robot = pose.translation() - init.y.head<2>();
+        t.info.view_ref = std::atan2(to_robot.y(), to_robot.x());
+      }
       if (obs->kind == MapFeatureKind::Line) std::tie(t.info.t_min, t.info.t_max) = extentAlong(init.y.x(), *obs, pose);
       t.info.observations = 1;
       t.y = init.y;
@@ -472,6 +508,7 @@ void FeatureSlam::handleUnmatched(const std::vector<const Observation*>& unmatch
     t.y = init.y;
     t.P = P_obs;
     t.gamma_known = t.gamma_known || obs->dim == 3;
+    if (obs->kind != MapFeatureKind::Line) widenView(t.info, viewAngle(t.info, init.y.head<2>()));
     if (obs->kind == MapFeatureKind::Line) {
       const auto [a, b] = extentAlong(init.y.x(), *obs, pose);
       t.info.t_min = std::min(t.info.t_min, a);

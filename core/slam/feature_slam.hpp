@@ -8,7 +8,9 @@
 //  - association: gate + JCBB + ambiguity rejection (slam/association.hpp), after per-kind
 //    compatibility: a line is only matched from the side it was first seen from (the two faces
 //    of a thin wall are different surfaces) and within `max_line_extent_gap` of its observed
-//    extent; corners need the same convexity;
+//    extent; corners need the same convexity; points and corners are only matched from
+//    directions within `max_view_change` of the arc of directions they were seen from (a small
+//    feature on the far side of a thin wall, centimetres away, is another target);
 //  - new features: an observation that matches nothing and lies outside the looser
 //    `new_feature_probability` gate of every map feature starts a *tentative* feature outside the
 //    filter; after `confirm_observations` observations (each within `tentative_timeout_s` of the
@@ -51,6 +53,9 @@ struct FeatureSlamParams {
   double min_line_distance = 0.05;    ///< m: lines closer to the robot are skipped (flip, §17.8)
   double min_corner_range = 0.05;     ///< m
   double max_line_extent_gap = 2.5;   ///< m: an observed segment this far beyond a map line's extent is another wall
+  /// rad: a point or corner seen from a direction this far outside the arc of directions it has
+  /// been seen from is another target (e.g. the far side of a thin wall)
+  double max_view_change = deg2rad(60.0);
   double observation_cov_scale = 1.0; ///< multiplies every measurement covariance
   double anchor_radius = 5.0;         ///< m
   int max_anchors = 24;
@@ -128,6 +133,9 @@ class FeatureSlam {
     bool convex = false;
     double side = 1.0;                       ///< lines: the flip sign s seen at initialisation
     double t_min = 0.0, t_max = 0.0;         ///< lines: extent along the map line direction
+    /// Points and corners: directions (map frame, feature → robot) they were seen from, as an
+    /// arc [view_lo, view_hi] relative to view_ref.
+    double view_ref = 0.0, view_lo = 0.0, view_hi = 0.0;
   };
   struct Tentative {
     FeatureInfo info;
@@ -144,7 +152,10 @@ class FeatureSlam {
   void emitAnchors(int64_t utime);
 
   std::optional<LinearizedObservation> linearize(int feature, const Observation& obs, double* side) const;
-  bool compatible(const FeatureInfo& info, const Observation& obs, double side) const;
+  bool compatible(const FeatureInfo& info, const Observation& obs, double side, const Vec2& position) const;
+  /// Direction from a feature at `position` to the robot, relative to the feature's reference.
+  double viewAngle(const FeatureInfo& info, const Vec2& position) const;
+  static void widenView(FeatureInfo& info, double relative);
   void growExtent(FeatureInfo& info, const Vec2& map_line, const Observation& obs, const Pose2& pose) const;
   void handleUnmatched(const std::vector<const Observation*>& unmatched, int64_t utime);
   void promote(Tentative& t, const Observation& obs);

@@ -41,6 +41,7 @@ struct Options {
   double seconds = 0.0;           ///< 0 = until the path ends
   double max_error_limit = 0.5;   ///< m: a run whose position error ever exceeds this failed
   std::string out;
+  std::string nees_trace;  ///< CSV of per-second NEES of every configuration (first seed)
   bool claim = true, speed = true;
 };
 
@@ -85,6 +86,7 @@ struct RunResult {
   bool success = false;
   double realtime_factor = 0.0;
   std::vector<double> nees;  ///< robot pose NEES at 1 Hz
+  std::vector<std::string> trace;  ///< per second: error (robot frame) and std, for --nees-trace
 };
 
 std::vector<PoseStamped> inStartFrame(std::vector<PoseStamped> poses) {
@@ -119,6 +121,12 @@ RunResult evaluate(FeatureSlamEstimator& e, const std::vector<PoseStamped>& trut
     if (const auto t = lookup.interpolate(p.utime, 30000)) {
       try {
         r.nees.push_back(poseNees(p.pose, p.cov, *t));
+        const Pose2 error = between(*t, p.pose);
+        const Mat3 cov = rotateCovariance(p.cov, -t->theta);
+        char line[256];
+        std::snprintf(line, sizeof line, "%.4f,%.4f,%.5f,%.4f,%.4f,%.5f", error.x, error.y, error.theta,
+                      std::sqrt(cov(0, 0)), std::sqrt(cov(1, 1)), std::sqrt(cov(2, 2)));
+        r.trace.push_back(line);
       } catch (const std::invalid_argument&) {
       }
     }
@@ -172,6 +180,11 @@ void runClaim(const Options& o) {
       if (!dir.empty()) writeTumTrajectory(dir + "/trajectory.tum", t.estimator->trajectory());
       const RunResult r = evaluate(*t.estimator, truth, sim.time(), t.seconds, o);
       rows[t.sensors].runs.push_back(r);
+      if (!o.nees_trace.empty() && k == 0) {
+        std::ofstream trace(o.nees_trace + "." + toString(t.sensors) + ".csv");
+        trace << "second,nees,forward_error,left_error,heading_error,forward_std,left_std,heading_std\n";
+        for (size_t i = 0; i < r.nees.size(); ++i) trace << i + 1 << "," << r.nees[i] << "," << r.trace[i] << "\n";
+      }
       success[t.sensors] = r.success;
       std::printf(" %6.3f %6.3f %4zu %-3s %s |", r.ate_rmse, r.max_error, r.map_size, r.loop_closed ? "yes" : "no",
                   r.success ? "ok  " : "FAIL");
@@ -289,6 +302,7 @@ int main(int argc, char** argv) {
   app.add_option("--seconds", o.seconds, "simulated seconds per run (0 = until the path ends)")->capture_default_str();
   app.add_option("--max-error", o.max_error_limit, "m: a run whose error ever exceeds this failed")->capture_default_str();
   app.add_option("--out", o.out, "write map.json and trajectory.tum of the first seed per configuration here");
+  app.add_option("--nees-trace", o.nees_trace, "write PREFIX.<sensors>.csv: per-second NEES of the first seed");
   app.add_flag("--speed-only", speed_only, "only the update timing");
   app.add_flag("--no-speed", no_speed, "skip the update timing");
   CLI11_PARSE(app, argc, argv);

@@ -185,6 +185,45 @@ TEST(FeatureSlam, LineEndpointsGrowAsMoreOfTheWallIsSeen) {
   EXPECT_EQ(wall.observations, 5);
 }
 
+/// A small target seen from one side, then at the same place from the opposite side (the far
+/// face of a thin wall): another target, mapped on its own.
+TEST(FeatureSlam, APointIsNotMatchedFromTheFarSide) {
+  FeatureSlamParams params;
+  params.confirm_observations = 1;
+  FeatureSlam slam(params);
+  OdometryReading o;
+  o.utime = 1'000'000;
+  slam.addOdometry(o);
+  auto seePoint = [&](const Vec2& map_point) {
+    FeatureSet set;
+    set.utime = o.utime;
+    PointFeature p;
+    const Vec2 local = Pose2(o.pose.x, 0.0, 0.0).inverseTransform(map_point);
+    p.x = local.x();
+    p.y = local.y();
+    p.cov = Mat2::Identity() * 1e-6;
+    set.points.push_back(p);
+    slam.addFeatures(set);
+  };
+  const Vec2 target(2.0, 0.5);
+  seePoint(target);
+  for (int k = 1; k <= 40; ++k) {  // drive 4 m along x, past the target
+    o.utime += 100'000;
+    o.left_travel = o.right_travel = o.pose.x = 0.1 * k;
+    slam.addOdometry(o);
+    if (k == 5) seePoint(target);  // still from behind-left: the same target
+  }
+  seePoint(target);  // now from ahead-right, 150° away from the first view
+  o.utime += 100'000;
+  slam.addOdometry(o);
+  slam.flush();
+  const FeatureMap map = slam.map();
+  ASSERT_EQ(map.features.size(), 2u);
+  EXPECT_EQ(map.features[0].observations, 2);
+  EXPECT_EQ(map.features[1].observations, 1);
+  EXPECT_EQ(slam.stats().paired, 1);
+}
+
 TEST(FeatureSlam, ScanAnchorsDescribeTheMapFromThePoseAtTheScan) {
   RunResult r = runSynthetic(3, 10.0);
   FeatureSlam& slam = r.slam;
