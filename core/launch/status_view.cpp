@@ -19,6 +19,27 @@ std::string note(const ProcessRecord& r) {
 
 }  // namespace
 
+std::string printable(const std::string& text) {
+  std::string out;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    if (c == '\x1b') {
+      // CSI: ESC '[' parameters… final byte in '@'..'~'; other escapes are two bytes long.
+      if (i + 1 < text.size() && text[i + 1] == '[') {
+        i += 2;
+        while (i < text.size() && (text[i] < '@' || text[i] > '~')) ++i;
+      } else {
+        ++i;
+      }
+    } else if (c == '\t') {
+      out += ' ';
+    } else if (c >= 0x20 && c != 0x7f) {
+      out += static_cast<char>(c);
+    }
+  }
+  return out;
+}
+
 std::string formatUptime(double seconds) {
   const long s = static_cast<long>(std::max(0.0, seconds));
   char buf[32];
