@@ -225,15 +225,24 @@ groups:
 
   // sleeper 1 + family 3 + stubborn 2 + escaper 2 + sim 1 processes.
   const int launcher_pid = launcher.process().pid();
+  // Poll until the escaper's child has really called setsid(): right after the fork it is
+  // still in the escaper's group, so counting groups at that moment gives five.
   std::vector<polarslam::ProcStat> tree;
-  for (auto end = Clock::now() + 10s; Clock::now() < end && tree.size() < 9; std::this_thread::sleep_for(50ms))
-    tree = descendantsOf(launcher_pid);
-  ASSERT_EQ(tree.size(), 9u) << launcher.output();
   std::set<int> groups_seen, pids;
-  for (const auto& p : tree) {
-    groups_seen.insert(p.pgrp);
-    pids.insert(p.pid);
+  const auto collect = [&] {
+    tree = descendantsOf(launcher_pid);
+    groups_seen.clear();
+    pids.clear();
+    for (const auto& p : tree) {
+      groups_seen.insert(p.pgrp);
+      pids.insert(p.pid);
+    }
+  };
+  for (auto end = Clock::now() + 10s; Clock::now() < end; std::this_thread::sleep_for(50ms)) {
+    collect();
+    if (tree.size() == 9 && groups_seen.size() == 6) break;
   }
+  ASSERT_EQ(tree.size(), 9u) << launcher.output();
   ASSERT_EQ(groups_seen.size(), 6u) << "five process groups plus the escaped session";
 
   launcher.process().signal(SIGINT);
