@@ -56,7 +56,9 @@ ValidReadings validReadings(const LaserScan& scan) {
 LineSegment trimGrazingEnds(const PolarReadings& r, LineSegment s, double max_incidence) {
   const PolarLine tls = fitLineTotalLeastSquares(r.sub(static_cast<size_t>(s.first), static_cast<size_t>(s.count())));
   if (!std::isfinite(tls.d)) return s;
-  auto grazing = [&](int i) { return std::abs(wrapAngle(tls.alpha - r.bearing[static_cast<size_t>(i)])) >= max_incidence; };
+  // A degree of margin: the polar fit's α differs slightly from the TLS α it is judged by here.
+  const double limit = max_incidence - deg2rad(1.0);
+  auto grazing = [&](int i) { return std::abs(wrapAngle(tls.alpha - r.bearing[static_cast<size_t>(i)])) >= limit; };
   while (s.count() > 0 && grazing(s.first)) ++s.first;
   while (s.count() > 0 && grazing(s.last)) --s.last;
   return s;
