@@ -1,0 +1,246 @@
+#include "scanmatch/prepared_scan.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+
+namespace polarslam {
+namespace {
+
+constexpr float kNoReturn = std::numeric_limits<float>::infinity();
+
+float median5(float a, float b, float c, float d, float e) {
+  // Order the pairs (a, b) and (d, e), then put the pair with the smaller head first: a is then
+  // below b, d and e, so it cannot be the median, which is the 2nd smallest of b, c, d, e.
+  if (a > b) std::swap(a, b);
+  if (d > e) std::swap(d, e);
+  if (a > d) {
+    std::swap(a, d);
+    std::swap(b, e);
+  }
+  const float lo = std::min(b, c), hi = std::max(b, c);
+  return std::min(std::max(lo, d), std::min(hi, e));
+}
+
+/// Ranges with increasing bearings, optionally decimated, invalid readings as +inf.
+std::vector<float> orderedRanges(const LaserScan& scan, int decimation) {
+  const size_t n = scan.ranges.size();
+  const size_t step = static_cast<size_t>(std::max(1, decimation));
+  std::vector<float> out;
+  out.reserve((n + step - 1) / step);
+  const bool reversed = scan.angle_increment < 0.0;
+  for (size_t k = 0; k < n; k += step) {
+    const float r = scan.ranges[reversed ? n - 1 - k : k];
+    out.push_back(std::isfinite(r) && r > 0.0f && r < scan.range_max ? r : kNoReturn);
+  }
+  return out;
+}
+
+/// Direction of the segment from point i-1 to point i, folded to [0, π).
+double foldedDirection(double dx, double dy) {
+  double a = fastAtan2(dy, dx);
+  if (a < 0.0) a += std::numbers::pi;
+  if (a >= std::numbers::pi) a -= std::numbers::pi;
+  return a;
+}
+
+double foldAngle(double a) {
+  a = std::fmod(a, std::numbers::pi);
+  return a < 0.0 ? a + std::numbers::pi : a;
+}
+
+/// Std of the running 3-median of the angles (§11.2 part 2).
+double smoothedSpread(const std::vector<double>& angles, std::vector<double>& smoothed) {
+  const size_t n = angles.size();
+  smoothed.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    if (i == 0 || i + 1 == n) {
+      smoothed[i] = angles[i];
+      continue;
+    }
+    const double a = angles[i - 1], b = angles[i], c = angles[i + 1];
+    smoothed[i] = std::max(std::min(a, b), std::min(std::max(a, b), c));
+  }
+  double mean = 0.0;
+  for (double a : smoothed) mean += a;
+  mean /= static_cast<double>(n);
+  double var = 0.0;
+  for (double a : smoothed) var += (a - mean) * (a - mean);
+  return std::sqrt(var / static_cast<double>(n));
+}
+
+/// Mean of the directions within ±5° of the fullest 2° bin, averaged across the 0/π wrap (§11.2 part 3).
+double corridorDirection(const std::vector<double>& angles) {
+  constexpr int kBins = 90;
+  const double bin_width = std::numbers::pi / kBins;
+  std::array<int, kBins> histogram{};
+  for (double a : angles) ++histogram[std::min(kBins - 1, static_cast<int>(a / bin_width))];
+  const int peak = static_cast<int>(std::max_element(histogram.begin(), histogram.end()) - histogram.begin());
+  const double centre = (peak + 0.5) * bin_width;
+  double sum = 0.0;
+  int count = 0;
+  for (double a : angles) {
+    double d = a - centre;  // nearest representative of a modulo π
+    if (d > std::numbers::pi / 2) d -= std::numbers::pi;
+    if (d < -std::numbers::pi / 2) d += std::numbers::pi;
+    if (std::abs(d) <= deg2rad(5.0)) {
+      sum += d;
+      ++count;
+    }
+  }
+  return foldAngle(centre + (count > 0 ? sum / count : 0.0));
+}
+
+}  // namespace
+
+void medianFilter5(const std::vector<float>& in, std::vector<float>& out) {
+  const size_t n = in.size();
+  out.resize(n);
+  if (n == 0) return;
+  auto at = [&](std::ptrdiff_t i) { return in[static_cast<size_t>(std::clamp<std::ptrdiff_t>(i, 0, static_cast<std::ptrdiff_t>(n) - 1))]; };
+  for (size_t k = 0; k < n; ++k) {
+    const auto i = static_cast<std::ptrdiff_t>(k);
+    out[k] = median5(at(i - 2), at(i - 1), at(i), at(i + 1), at(i + 2));
+  }
+}
+
+void segmentScan(const std::vector<float>& range, const std::vector<uint8_t>& flags, double max_distance,
+                 std::vector<int32_t>& segment) {
+  const size_t n = range.size();
+  segment.assign(n, 0);
+  int32_t current = 0, next_id = 1;  // current = 0: no segment open
+  int count = 0;
+  auto closeLone = [&](size_t last) {  // a segment of one reading is an isolated point
+    if (count == 1) segment[last] = 0;
+  };
+  for (size_t i = 0; i < n; ++i) {
+    if (flags[i]) {  // a bad reading breaks the segment; the next good one opens a new one
+      if (current != 0 && i > 0) closeLone(i - 1);
+      current = 0;
+      count = 0;
+      continue;
+    }
+    if (current == 0) {
+      current = next_id++;
+      segment[i] = current;
+      count = 1;
+      continue;
+    }
+    const double step = std::abs(static_cast<double>(range[i]) - range[i - 1]);
+    const bool have_two = i >= 2 && !flags[i - 2];
+    const double extrapolation_error =
+        have_two ? std::abs(static_cast<double>(range[i]) - (2.0 * range[i - 1] - range[i - 2])) : kNoReturn;
+    // The extrapolation test keeps walls seen at grazing incidence in one piece.
+    const bool stays = step < max_distance ||
+                       (have_two && segment[i - 2] != 0 && segment[i - 1] == segment[i - 2] &&
+                        extrapolation_error < max_distance);
+    if (stays) {
+      segment[i] = current;
+      ++count;
+    } else if (count == 1) {
+      if (have_two && segment[i - 2] == 0 && extrapolation_error < max_distance) {
+        // three collinear readings "by coincidence": keep them together
+        segment[i - 2] = segment[i - 1] = segment[i] = current;
+        count = 3;
+      } else {
+        segment[i - 1] = 0;
+        segment[i] = current;
+        count = 1;
+      }
+    } else {
+      current = next_id++;
+      segment[i] = current;
+      count = 1;
+    }
+  }
+  if (current != 0 && n > 0) closeLone(n - 1);
+}
+
+CorridorInfo detectCorridor(const PreparedScan& scan, double threshold) {
+  std::vector<double> angles;
+  angles.reserve(scan.size());
+  for (size_t i = 1; i < scan.size(); ++i)
+    if (scan.segment[i] != 0 && scan.segment[i] == scan.segment[i - 1] && !scan.bad(i) && !scan.bad(i - 1))
+      angles.push_back(foldedDirection(scan.x[i] - scan.x[i - 1], scan.y[i] - scan.y[i - 1]));
+  CorridorInfo info;
+  if (angles.size() < 3) return info;
+  std::vector<double> smoothed, rotated(angles.size());
+  const double spread0 = smoothedSpread(angles, smoothed);
+  // Second pass rotated by 36° so that a corridor near 0°/180° is not split by the fold.
+  for (size_t i = 0; i < angles.size(); ++i) rotated[i] = foldAngle(angles[i] + std::numbers::pi / 5.0);
+  const double spread1 = smoothedSpread(rotated, smoothed);
+  info.spread = std::min(spread0, spread1);
+  info.is_corridor = info.spread < threshold;
+  info.angle = corridorDirection(angles);
+  return info;
+}
+
+PreparedScan prepareScan(const LaserScan& scan, const PsmParams& params) {
+  const std::string why = validateScan(scan);
+  if (!why.empty()) throw std::invalid_argument("prepareScan: " + why);
+  PreparedScan out;
+  out.utime = scan.utime;
+  const int step = std::max(1, params.decimation);
+  std::vector<float> raw = orderedRanges(scan, step);
+  const size_t n = raw.size();
+  const double increment = std::abs(scan.angle_increment) * step;
+  const double first = scan.angle_increment < 0.0 ? scan.bearing(scan.size() - 1) : scan.angle_min;
+  out.geometry = beamGeometry(n, first, increment);
+
+  if (params.median_filter) {
+    medianFilter5(raw, out.range);
+    if (params.median_replace_threshold > 0.0)
+      for (size_t i = 0; i < n; ++i)
+        if (!(std::abs(out.range[i] - raw[i]) > params.median_replace_threshold)) out.range[i] = raw[i];
+  } else {
+    out.range = std::move(raw);
+  }
+
+  out.flags.assign(n, 0);
+  out.x.assign(n, 0.0);
+  out.y.assign(n, 0.0);
+  out.masked_range.assign(n, 0.0f);
+  out.mask.assign(n, 0.0f);
+  for (size_t i = 0; i < n; ++i) {
+    const float r = out.range[i];
+    if (!(r <= params.max_range) || r < params.min_range) {
+      out.flags[i] = kFlagRange;
+      continue;
+    }
+    out.x[i] = r * out.geometry->cos_table[i];
+    out.y[i] = r * out.geometry->sin_table[i];
+    out.masked_range[i] = r;
+    out.mask[i] = 1.0f;
+    ++out.valid_count;
+  }
+  const size_t padded = (n + kSimdWidth - 1) / kSimdWidth * kSimdWidth;
+  out.xf.assign(padded, 0.0f);
+  out.yf.assign(padded, 0.0f);
+  for (size_t i = 0; i < n; ++i) {
+    out.xf[i] = static_cast<float>(out.x[i]);
+    out.yf[i] = static_cast<float>(out.y[i]);
+  }
+  segmentScan(out.range, out.flags, params.segment_max_distance, out.segment);
+  out.pair_mask.assign(padded, 0);
+  for (size_t i = 1; i < n; ++i)
+    if (out.segment[i] != 0 && out.segment[i] == out.segment[i - 1]) out.pair_mask[i] = -1;
+  // Slope of the range profile, dr/dj: a least-squares line through five readings of one segment
+  // (σ_slope ≈ σ_r/√10 per beam), three at segment ends. Noisy slopes would give the matcher
+  // information it does not have, e.g. along a corridor.
+  out.slope.assign(n, std::numeric_limits<float>::quiet_NaN());
+  auto same = [&](size_t a, size_t b) { return out.segment[a] != 0 && out.segment[a] == out.segment[b]; };
+  for (size_t i = 1; i + 1 < n; ++i) {
+    if (!same(i, i - 1) || !same(i, i + 1)) continue;
+    if (i >= 2 && i + 2 < n && same(i, i - 2) && same(i, i + 2))
+      out.slope[i] = (2.0f * (out.range[i + 2] - out.range[i - 2]) + out.range[i + 1] - out.range[i - 1]) / 10.0f;
+    else
+      out.slope[i] = 0.5f * (out.range[i + 1] - out.range[i - 1]);
+  }
+  out.corridor = detectCorridor(out, params.corridor_threshold);
+  return out;
+}
+
+}  // namespace polarslam
