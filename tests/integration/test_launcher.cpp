@@ -222,6 +222,8 @@ groups:
   const std::vector<std::string> names{"sleeper", "family", "stubborn", "escaper", "sim"};
   for (const auto& name : names)
     ASSERT_TRUE(status.waitForState(name, "running", 15s).has_value()) << name << " not running\n" << launcher.output();
+  // The simulator's own status: its SIGINT handler is in place, so SIGINT ends it with exit 0.
+  ASSERT_TRUE(status.waitForState("polarslam-sim", "running", 15s).has_value()) << launcher.output();
 
   // sleeper 1 + family 3 + stubborn 2 + escaper 2 + sim 1 processes.
   const int launcher_pid = launcher.process().pid();
