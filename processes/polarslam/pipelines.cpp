@@ -1,6 +1,7 @@
 #include "pipelines.hpp"
 
 #include "slam/feature_slam_estimator.hpp"
+#include "slam/psm_slam_estimator.hpp"
 
 namespace polarslam {
 
@@ -12,6 +13,11 @@ const std::map<std::string, PipelineFactory>& pipelines() {
          const SlamSensors sensors = parseSlamSensors(o.sensors);
          return std::make_unique<FeatureSlamEstimator>(
              o.config.empty() ? configForRobot(SimConfig{}, sensors) : loadFeatureSlamConfig(o.config, sensors));
+       }},
+      {"psm-slam",
+       [](const PipelineOptions& o) -> std::unique_ptr<Estimator> {
+         return std::make_unique<PsmSlamEstimator>(o.config.empty() ? PsmSlamEstimatorConfig{}
+                                                                    : loadPsmSlamEstimatorConfig(o.config));
        }},
   };
   return factories;

@@ -1,0 +1,512 @@
+#include "slam/psm_slam.hpp"
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <unordered_map>
+
+namespace polarslam {
+namespace {
+
+/// Jacobian of the inverse pose ⊖p with respect to p.
+Mat3 inverseJacobian(const Pose2& p) {
+  const double c = std::cos(p.theta), s = std::sin(p.theta);
+  const Pose2 inv = p.inverse();
+  Mat3 J;
+  J << -c, -s, inv.y, s, -c, -inv.x, 0.0, 0.0, -1.0;
+  return J;
+}
+
+/// The pose of b's keyframe seen from a's keyframe, from the same scan matched against both:
+/// z_a ⊕ ⊖z_b, with the two (independent) match covariances propagated.
+std::pair<Pose2, Mat3> composeThroughScan(const Pose2& z_a, const Mat3& R_a, const Pose2& z_b, const Mat3& R_b) {
+  const Pose2 z_b_inv = z_b.inverse();
+  const Mat3 Ja = composeJacobianA(z_a, z_b_inv);
+  const Mat3 Jb = composeJacobianB(z_a) * inverseJacobian(z_b);
+  return {z_a * z_b_inv, Ja * R_a * Ja.transpose() + Jb * R_b * Jb.transpose()};
+}
+
+Mat3 covarianceFloor(double sigma_xy, double sigma_theta) {
+  return Vec3(sigma_xy * sigma_xy, sigma_xy * sigma_xy, sigma_theta * sigma_theta).asDiagonal();
+}
+
+bool finitePose(const Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
+
+}  // namespace
+
+PsmSlam::PsmSlam(PsmSlamParams params) : params_(std::move(params)), matcher_(params_.psm), odometry_(params_.odometry) {
+  filter_.reset(Pose2(), Mat3::Zero());
+}
+
+void PsmSlam::start(const Pose2& pose) {
+  filter_.reset(pose, Mat3::Zero());
+  last_scan_pose_ = pose;
+  started_ = true;
+}
+
+void PsmSlam::addOdometry(const OdometryReading& reading) {
+  const OdometryMotionResult result = odometry_.add(reading);
+  if (!result.ok()) {
+    ++stats_.odometry_rejected;
+    return;
+  }
+  if (!started_) {
+    start(Pose2());
+    filter_utime_ = reading.utime;
+  }
+  have_odometry_ = true;
+  const OdometryMotion& motion = *result.motion;
+  const Mat3 Ja = composeJacobianA(pending_motion_, motion.delta), Jb = composeJacobianB(pending_motion_);
+  pending_cov_ = Ja * pending_cov_ * Ja.transpose() + Jb * motion.cov * Jb.transpose();
+  pending_motion_ = pending_motion_ * motion.delta;
+  pending_rotation_ += std::abs(motion.dtheta);
+}
+
+void PsmSlam::predictTo(int64_t utime) {
+  // Real logs step back in time now and then: such a scan adds no elapsed-time noise.
+  const double dt = std::clamp(1e-6 * static_cast<double>(utime - filter_utime_), 0.0, 5.0);
+  filter_utime_ = std::max(filter_utime_, utime);
+  Pose2 motion = pending_motion_;
+  Mat3 Q = pending_cov_;
+  if (have_odometry_) {
+    Q += Vec3(params_.time_noise_xy * dt, params_.time_noise_xy * dt, params_.time_noise_theta * dt).asDiagonal();
+  } else {
+    motion = last_scan_motion_;
+    Q += Vec3(params_.no_odometry_noise_xy * dt, params_.no_odometry_noise_xy * dt, params_.no_odometry_noise_theta * dt)
+             .asDiagonal();
+  }
+  odometry_still_ = have_odometry_ && pending_motion_.translation().norm() <= params_.stationary_odometry_translation &&
+                    pending_rotation_ <= params_.stationary_odometry_rotation;
+  filter_.predict(motion, Q);
+  pending_motion_ = Pose2();
+  pending_cov_.setZero();
+  pending_rotation_ = 0.0;
+}
+
+std::vector<Pose2> PsmSlam::loopGuesses(const RelativePosePrediction& prior, bool wide) const {
+  std::vector<Pose2> guesses{prior.mean};
+  const double step = params_.loop_guess_spacing;
+  const Mat2 cov = prior.cov.topLeftCorner<2, 2>();
+  const double sigma = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat2>(cov).eigenvalues().maxCoeff()));
+  const double k = params_.loop_candidate_sigmas;
+  if (!wide || !(step > 0.0) || k * sigma < step) return guesses;
+  // A prior wider than PSM's basin: start also from a grid over the k-σ ellipse, keeping the
+  // positions from which the robot could see the keyframe's surroundings (within the loop
+  // search radius of it), most likely first.
+  const Mat2 information = (cov + 1e-9 * Mat2::Identity()).inverse();
+  const int n = static_cast<int>(std::ceil(k * sigma / step));
+  std::vector<std::pair<double, Vec2>> grid;
+  for (int i = -n; i <= n; ++i)
+    for (int j = -n; j <= n; ++j) {
+      const Vec2 offset(i * step, j * step);
+      const double d2 = offset.dot(information * offset);
+      const Vec2 position = prior.mean.translation() + offset;
+      if ((i != 0 || j != 0) && d2 <= k * k && position.norm() <= params_.loop_search_radius) grid.emplace_back(d2, position);
+    }
+  std::sort(grid.begin(), grid.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [d2, position] : grid) {
+    if (guesses.size() >= static_cast<size_t>(std::max(1, params_.loop_max_guesses))) break;
+    guesses.emplace_back(position.x(), position.y(), prior.mean.theta);
+  }
+  return guesses;
+}
+
+std::optional<PsmSlam::Observation> PsmSlam::matchKeyframe(const Keyframe& keyframe, const PreparedScan& scan,
+                                                           const Pose2& mount,
+                                                           const RelativePosePrediction& prior, bool loop_candidate,
+                                                           bool wide_search) {
+  const std::vector<Pose2> guesses = loop_candidate ? loopGuesses(prior, wide_search) : std::vector<Pose2>{prior.mean};
+  const double saved_window = matcher_.params().initial_search_window;
+  if (loop_candidate) matcher_.params().initial_search_window = params_.loop_search_window;
+  std::optional<Observation> best;
+  for (const Pose2& guess : guesses) {
+    const Pose2 laser_guess = laserPoseInReferenceLaser(Pose2(), guess, keyframe.laser_mount, mount);
+    const MatchResult m = matcher_.match(keyframe.scan, scan, laser_guess, params_.method);
+    if (!m.ok() || (loop_candidate && !m.converged) || !finitePose(m.pose) || !m.cov.allFinite()) continue;
+    Observation o;
+    o.keyframe = keyframe.id;
+    o.z = robotMotionFromLaserMotion(m.pose, keyframe.laser_mount, mount);
+    o.R = params_.match_cov_scale * robotMotionCovariance(m.pose, m.cov, keyframe.laser_mount, mount) +
+          covarianceFloor(params_.min_match_sigma_xy, params_.min_match_sigma_theta);
+    o.error_index = m.error_index;
+    o.overlap = static_cast<double>(m.valid_points) / std::max(1, std::min(keyframe.scan.valid_count, scan.valid_count));
+    if (!best || o.error_index < best->error_index) best = o;
+  }
+  matcher_.params().initial_search_window = saved_window;
+  return best;
+}
+
+std::optional<PsmSlam::Observation> PsmSlam::trackReference(const PreparedScan& scan, const Pose2& mount) {
+  const int64_t active = filter_.activeKeyframe();
+  const Keyframe& reference = keyframe(active);
+  const RelativePosePrediction prior = filter_.predictRelative(active);
+  std::optional<Observation> best = matchKeyframe(reference, scan, mount, prior, false, false);
+  if (!have_odometry_) return best;
+  // Real odometry goes stale for a few scans and then catches up in one jump. When it disagrees
+  // with the robot's previous motion, match from that motion too and keep the better match.
+  const Pose2 keyframe_pose = filter_.keyframePose(active);
+  RelativePosePrediction constant_velocity = prior;
+  constant_velocity.mean = between(keyframe_pose, last_scan_pose_ * last_scan_motion_);
+  const Pose2 disagreement = between(prior.mean, constant_velocity.mean);
+  if (disagreement.translation().norm() < params_.odometry_check_translation &&
+      std::abs(disagreement.theta) < params_.odometry_check_rotation)
+    return best;
+  const std::optional<Observation> other = matchKeyframe(reference, scan, mount, constant_velocity, false, false);
+  const bool other_better = other && goodMatch(*other, false) &&
+                            (!best || !goodMatch(*best, false) || other->error_index < best->error_index);
+  if (!other_better) return best;
+  if (best && goodMatch(*best, false)) {
+    const Pose2 spread = between(best->z, other->z);
+    if (spread.translation().norm() < params_.odometry_check_translation &&
+        std::abs(spread.theta) < params_.odometry_check_rotation)
+      return best;  // the same answer from both starts: the odometry was fine
+  }
+  // The odometry step was wrong: widen the prior by how far off it was, so the filter follows the match.
+  const Pose2 miss = between(prior.mean, other->z);
+  const double miss_xy = miss.translation().squaredNorm();
+  filter_.predict(Pose2(), Vec3(miss_xy, miss_xy, miss.theta * miss.theta).asDiagonal());
+  ++stats_.odometry_faults;
+  return other;
+}
+
+bool PsmSlam::goodMatch(const Observation& o, bool loop_candidate) const {
+  const double max_error = loop_candidate ? params_.loop_max_error_index : params_.max_error_index;
+  const double min_overlap = loop_candidate ? params_.loop_min_overlap : params_.min_overlap;
+  return std::isfinite(o.error_index) && o.error_index <= max_error && o.overlap >= min_overlap && o.R.allFinite();
+}
+
+bool PsmSlam::robotStill(const Observation& tracked) const {
+  const Pose2 predicted = filter_.predictRelative(tracked.keyframe).mean;
+  const Pose2 difference = between(predicted, tracked.z);
+  return difference.translation().norm() <= params_.stationary_match_translation &&
+         std::abs(difference.theta) <= params_.stationary_match_rotation;
+}
+
+bool PsmSlam::needsNewReference(const std::optional<Observation>& tracked) {
+  const Pose2 relative = filter_.predictRelative(filter_.activeKeyframe()).mean;
+  size_t* reason = nullptr;
+  if (!tracked) reason = &stats_.references_lost;
+  else if (relative.translation().norm() > params_.keyframe_distance) reason = &stats_.references_too_far;
+  else if (std::abs(relative.theta) > params_.keyframe_angle) reason = &stats_.references_turned;
+  else if (tracked->overlap < params_.keyframe_min_overlap) reason = &stats_.references_overlap;
+  if (reason) ++*reason;
+  return reason != nullptr;
+}
+
+bool PsmSlam::isOld(int64_t id) const { return filter_.activeKeyframe() - id >= params_.loop_min_keyframe_gap; }
+
+std::vector<PsmSlam::Candidate> PsmSlam::referenceCandidates() const {
+  const double reuse_distance = params_.reuse_fraction * params_.keyframe_distance;
+  const double reuse_angle = params_.reuse_fraction * params_.keyframe_angle;
+  const double k = params_.loop_candidate_sigmas;
+  std::vector<Candidate> candidates;
+  for (const int64_t id : filter_keyframes_) {
+    if (id == filter_.activeKeyframe()) continue;
+    // Only keyframes that could become the reference again, or old ones (loop closures), are
+    // worth a match: the recent chain is already tied to the active keyframe.
+    const bool old = isOld(id);
+    const RelativePosePrediction p = filter_.predictRelative(id);
+    const double distance = p.mean.translation().norm();
+    const double radius = old ? params_.loop_search_radius : reuse_distance;
+    const double max_heading = old ? params_.loop_max_heading_difference : reuse_angle;
+    // Mahalanobis neighbourhood: the robot may be within `radius` of the keyframe if the
+    // shortfall along the line to it is within k standard deviations.
+    const double shortfall = std::max(0.0, distance - radius);
+    if (shortfall > 0.0) {
+      const Vec2 u = p.mean.translation() / distance;
+      const double variance = u.dot(p.cov.topLeftCorner<2, 2>() * u);
+      if (shortfall * shortfall > k * k * variance) continue;
+    }
+    const double heading_shortfall = std::max(0.0, std::abs(p.mean.theta) - max_heading);
+    if (heading_shortfall * heading_shortfall > k * k * p.cov(2, 2)) continue;
+    candidates.push_back({id, old, distance + std::abs(p.mean.theta), p});
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.distance < b.distance; });
+  if (candidates.size() > static_cast<size_t>(std::max(0, params_.max_candidates_per_scan)))
+    candidates.resize(static_cast<size_t>(std::max(0, params_.max_candidates_per_scan)));
+  return candidates;
+}
+
+bool PsmSlam::selectReference(const LaserScan& scan, PreparedScan& prepared, const std::optional<Observation>& tracked) {
+  const int64_t previous = filter_.activeKeyframe();
+  const RelativePosePrediction link = filter_.predictRelative(previous);
+  std::vector<Observation> accepted;
+  if (tracked) accepted.push_back(*tracked);
+  bool loop = false;
+  bool wide_search_done = false;
+  for (const Candidate& c : referenceCandidates()) {
+    ++stats_.candidate_matches;
+    // One wide (many-guess) search per decision: it is the expensive part of loop closure.
+    const bool wide = c.old && !wide_search_done;
+    wide_search_done = wide_search_done || wide;
+    std::optional<Observation> o = matchKeyframe(keyframe(c.id), prepared, scan.laser_pose, c.prediction, c.old, wide);
+    if (!o || !goodMatch(*o, c.old)) {
+      if (c.old) ++(o ? stats_.loop_poor_matches : stats_.loop_failed_matches);
+      continue;
+    }
+    if (!c.old) {
+      if (filter_.update(c.id, o->z, o->R, params_.chi2_gate).accepted) accepted.push_back(*o);
+      continue;
+    }
+    if (applyLoopClosure(c, *o)) {
+      accepted.push_back(*o);
+      loop = true;
+    }
+  }
+  const Observation* reuse = nullptr;
+  for (const Observation& o : accepted) {
+    if (o.keyframe == previous) continue;
+    if (o.z.translation().norm() <= params_.reuse_fraction * params_.keyframe_distance &&
+        std::abs(o.z.theta) <= params_.reuse_fraction * params_.keyframe_angle && o.overlap >= params_.keyframe_min_overlap &&
+        (!reuse || o.z.translation().norm() < reuse->z.translation().norm()))
+      reuse = &o;
+  }
+  if (reuse) {
+    reuseReference(*reuse, accepted);
+  } else {
+    const bool linked = tracked.has_value();
+    addKeyframe(scan, std::move(prepared), accepted, linked ? std::nullopt : std::optional(link), previous);
+  }
+  return loop;
+}
+
+void PsmSlam::addGraphEdge(int64_t from, int64_t to, const Pose2& z, const Mat3& R, PoseGraphEdgeKind kind) {
+  if (kind == PoseGraphEdgeKind::Match && std::abs(to - from) >= params_.loop_min_keyframe_gap) kind = PoseGraphEdgeKind::Loop;
+  PoseGraphEdge edge;
+  edge.from = from;
+  edge.to = to;
+  edge.measurement = z;
+  edge.covariance = 0.5 * (R + R.transpose());
+  edge.kind = kind;
+  try {
+    graph_.addEdge(edge);
+  } catch (const std::invalid_argument&) {
+    // A degenerate covariance: the filter has used the match; the graph does without it.
+  }
+}
+
+bool PsmSlam::needsConfirmation(const RelativePosePrediction& prediction) const {
+  const double variance = Eigen::SelfAdjointEigenSolver<Mat2>(prediction.cov.topLeftCorner<2, 2>()).eigenvalues().maxCoeff();
+  return std::sqrt(std::max(0.0, variance)) > params_.loop_confirm_sigma;
+}
+
+bool PsmSlam::confirmedByHypothesis(const Pose2& robot, const Pose2& map_pose) const {
+  for (const LoopHypothesis& h : hypotheses_) {
+    if (h.scan == stats_.scans || stats_.scans - h.scan > static_cast<size_t>(params_.loop_confirm_scans)) continue;
+    // The two closures must agree on how the robot moved in between, as the filter tracked it.
+    const Pose2 disagreement = between(between(h.robot, robot), between(h.map_pose, map_pose));
+    if (disagreement.translation().norm() <= params_.loop_confirm_translation &&
+        std::abs(disagreement.theta) <= params_.loop_confirm_rotation)
+      return true;
+  }
+  return false;
+}
+
+bool PsmSlam::applyLoopClosure(const Candidate& c, const Observation& o) {
+  double gate = params_.loop_chi2_gate;
+  if (needsConfirmation(c.prediction)) {
+    // A wide prior lets an aliased match (a look-alike corridor) through the χ² gate; a second,
+    // independent closure that agrees with it is the evidence that it is the right place.
+    const Pose2 robot = filter_.robotPose(), map_pose = filter_.keyframePose(c.id) * o.z;
+    if (!confirmedByHypothesis(robot, map_pose)) {
+      hypotheses_.push_back({stats_.scans, robot, map_pose});
+      if (hypotheses_.size() > 16) hypotheses_.erase(hypotheses_.begin());
+      ++stats_.loop_unconfirmed;
+      return false;
+    }
+    gate = params_.loop_confirmed_chi2_gate;
+  }
+  if (!filter_.update(c.id, o.z, o.R, gate).accepted) {
+    ++stats_.loop_gate_rejections;
+    return false;
+  }
+  ++stats_.loop_closures;
+  return true;
+}
+
+void PsmSlam::reuseReference(const Observation& chosen, const std::vector<Observation>& accepted) {
+  for (const Observation& o : accepted) {
+    if (o.keyframe == chosen.keyframe) continue;
+    const auto [z, R] = composeThroughScan(o.z, o.R, chosen.z, chosen.R);
+    addGraphEdge(o.keyframe, chosen.keyframe, z, R, PoseGraphEdgeKind::Match);
+  }
+  filter_.setActiveKeyframe(chosen.keyframe);
+  ++stats_.reference_reuses;
+}
+
+void PsmSlam::addKeyframe(const LaserScan& scan, PreparedScan prepared, const std::vector<Observation>& accepted,
+                          const std::optional<RelativePosePrediction>& odometry_link, int64_t previous) {
+  const int64_t id = static_cast<int64_t>(keyframes_.size());
+  filter_.addKeyframe(id);
+  filter_keyframes_.insert(id);
+  graph_.addNode({id, scan.utime, filter_.robotPose()});
+  for (const Observation& o : accepted) addGraphEdge(o.keyframe, id, o.z, o.R, PoseGraphEdgeKind::Match);
+  if (odometry_link && previous >= 0)
+    addGraphEdge(previous, id, odometry_link->mean, odometry_link->cov + covarianceFloor(1e-3, 1e-3),
+                 PoseGraphEdgeKind::Odometry);
+  keyframes_.push_back({id, scan.utime, scan.laser_pose, std::move(prepared)});
+  ++stats_.keyframes;
+  marginaliseOldKeyframes();
+}
+
+void PsmSlam::marginaliseKeyframe(int64_t id) {
+  graph_.setPose(id, filter_.keyframePose(id));
+  filter_.removeKeyframe(id);
+  filter_keyframes_.erase(id);
+  skeleton_.erase(id);
+}
+
+void PsmSlam::marginaliseOldKeyframes() {
+  // Keyframes that have just left the recent window: keep one if it adds to the skeleton.
+  const int64_t window_start = filter_.activeKeyframe() - std::max(1, params_.filter_window);
+  while (!filter_keyframes_.empty()) {
+    const auto candidate = std::find_if(filter_keyframes_.begin(), filter_keyframes_.end(),
+                                        [&](int64_t id) { return id < window_start && !skeleton_.count(id); });
+    if (candidate == filter_keyframes_.end()) break;
+    const int64_t id = *candidate;
+    const Pose2 pose = filter_.keyframePose(id);
+    const bool covered = std::any_of(skeleton_.begin(), skeleton_.end(), [&](int64_t kept) {
+      const Pose2 other = filter_.keyframePose(kept);
+      return (other.translation() - pose.translation()).norm() < params_.skeleton_spacing &&
+             std::abs(wrapAngle(other.theta - pose.theta)) < params_.skeleton_heading;
+    });
+    if (covered) {
+      marginaliseKeyframe(id);
+      keyframes_[static_cast<size_t>(id)].scan = PreparedScan{};  // never matched again
+    } else {
+      skeleton_.insert(id);
+    }
+  }
+  while (filter_keyframes_.size() > std::max<size_t>(2, params_.max_filter_keyframes)) {
+    auto it = filter_keyframes_.begin();
+    if (*it == filter_.activeKeyframe()) ++it;
+    const int64_t id = *it;
+    marginaliseKeyframe(id);
+    keyframes_[static_cast<size_t>(id)].scan = PreparedScan{};
+  }
+}
+
+void PsmSlam::syncGraphFromFilter() {
+  // Keyframes still in the filter take its (loop-corrected) estimate; the ones marginalised
+  // earlier move rigidly with the filter keyframe before them, so that the optimiser starts
+  // from a consistent guess instead of a map torn at every marginalised keyframe.
+  Pose2 correction;  // new ⊕ ⊖old of the latest filter keyframe passed
+  for (const PoseGraphNode& node : std::vector<PoseGraphNode>(graph_.nodes())) {
+    if (filter_.hasKeyframe(node.id)) {
+      const Pose2 updated = filter_.keyframePose(node.id);
+      correction = updated * node.pose.inverse();
+      graph_.setPose(node.id, updated);
+    } else {
+      graph_.setPose(node.id, correction * node.pose);
+    }
+  }
+}
+
+PoseGraphOptimizationSummary PsmSlam::optimize() {
+  syncGraphFromFilter();
+  const PoseGraphOptimizationSummary summary = optimizePoseGraph(graph_, params_.graph);
+  if (summary.solved) {
+    std::unordered_map<int64_t, Pose2> poses;
+    for (const int64_t id : filter_keyframes_) poses[id] = graph_.node(id).pose;
+    filter_.setKeyframePoses(poses);
+  }
+  ++stats_.optimizations;
+  stats_.optimization_seconds += summary.seconds;
+  stats_.last_optimization_seconds = summary.seconds;
+  stats_.rejected_loop_edges += summary.rejected_loops;
+  keyframes_at_last_optimization_ = static_cast<int64_t>(keyframes_.size());
+  loop_pending_ = false;
+  return summary;
+}
+
+void PsmSlam::record(int64_t utime, PsmSlamScanResult& result) {
+  const Pose2 robot = filter_.robotPose();
+  const int64_t anchor = filter_.activeKeyframe();
+  TrajectoryRecord r;
+  r.utime = utime;
+  r.anchor = anchor;
+  r.relative = anchor >= 0 ? between(filter_.keyframePose(anchor), robot) : robot;
+  r.cov = filter_.robotCovariance();
+  records_.push_back(r);
+  result.pose = {utime, robot, r.cov};
+  last_scan_motion_ = between(last_scan_pose_, robot);
+  last_scan_pose_ = robot;
+  stats_.filter_flushes = filter_.flushCount();
+}
+
+PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
+  ++stats_.scans;
+  PsmSlamScanResult result;
+  if (!started_) {
+    start(Pose2());
+    filter_utime_ = scan.utime;
+  }
+  predictTo(scan.utime);
+  std::optional<PreparedScan> prepared;
+  if (validateScan(scan).empty()) {
+    try {
+      prepared = prepareScan(scan, params_.psm);
+    } catch (const std::exception&) {
+      prepared.reset();
+    }
+  }
+  if (!prepared || prepared->valid_count < params_.psm.min_valid_points) {
+    ++stats_.unusable_scans;
+    record(scan.utime, result);
+    return result;
+  }
+  result.usable = true;
+  if (keyframes_.empty()) {
+    addKeyframe(scan, std::move(*prepared), {}, std::nullopt, -1);
+    result.new_keyframe = true;
+    record(scan.utime, result);
+    return result;
+  }
+  const int64_t active = filter_.activeKeyframe();
+  std::optional<Observation> tracked = trackReference(*prepared, scan.laser_pose);
+  if (tracked && goodMatch(*tracked, false)) {
+    if (odometry_still_ && robotStill(*tracked)) {
+      result.held = true;
+      ++stats_.held_scans;
+    } else if (filter_.update(active, tracked->z, tracked->R, params_.chi2_gate).accepted) {
+      result.tracked = true;
+      ++stats_.tracked_scans;
+    } else {
+      ++stats_.gate_rejections;
+      tracked.reset();
+    }
+  } else {
+    ++stats_.match_failures;
+    tracked.reset();
+  }
+  if (needsNewReference(tracked)) {
+    const size_t keyframes_before = keyframes_.size();
+    result.loop_closed = selectReference(scan, *prepared, tracked);
+    result.new_keyframe = keyframes_.size() > keyframes_before;
+    if (result.loop_closed) loop_pending_ = true;
+  }
+  if (loop_pending_ && params_.optimize_on_loop &&
+      static_cast<int64_t>(keyframes_.size()) - keyframes_at_last_optimization_ >=
+          params_.min_keyframes_between_optimizations) {
+    optimize();
+    result.optimized = true;
+  }
+  record(scan.utime, result);
+  return result;
+}
+
+std::vector<PoseStamped> PsmSlam::trajectory() const {
+  std::vector<PoseStamped> poses;
+  poses.reserve(records_.size());
+  for (const TrajectoryRecord& r : records_) {
+    Pose2 pose = r.relative;
+    if (r.anchor >= 0)
+      pose = (filter_.hasKeyframe(r.anchor) ? filter_.keyframePose(r.anchor) : graph_.node(r.anchor).pose) * r.relative;
+    poses.push_back({r.utime, pose, r.cov});
+  }
+  return poses;
+}
+
+}  // namespace polarslam

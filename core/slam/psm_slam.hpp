@@ -1,0 +1,190 @@
+#pragma once
+// SLAM with Polar Scan Matching (thesis §4.5, notes §18), plus global pose-graph optimisation.
+//
+//   PsmSlam slam(params);
+//   slam.addOdometry(reading);            // any number, in time order
+//   PsmSlamScanResult r = slam.addScan(scan);   // r.pose: robot pose in the map frame now
+//   ...
+//   slam.optimize();                      // at the end: global consistency
+//   std::vector<PoseStamped> poses = slam.trajectory();   // one pose per scan
+//
+// Per scan: the filter (psm_slam_filter.hpp) predicts with the odometry accumulated since the
+// previous scan; PSM matches the scan against the active reference scan from that prior; a
+// good match (converged, small error index, enough overlap, inside the χ² gate) updates the
+// filter, unless odometry and match agree the robot stands still, in which case the pose is held
+// (PSM's per-match jitter would otherwise accumulate). When the robot has moved too far from the
+// reference, or the overlap drops, the filter's uncertainty selects nearby reference scans
+// (a Mahalanobis neighbourhood); each is matched, gated against the prediction and, if it
+// passes, applied. A close, well-overlapping one becomes the reference again; otherwise the
+// scan becomes a new reference. Matches with old reference scans are loop closures: they add
+// robust edges to the pose graph and trigger a Ceres optimisation whose poses go back into the
+// filter. Every scan's pose is stored relative to its reference scan, so the whole trajectory
+// follows the optimised graph.
+#include <cstdint>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "geometry/features.hpp"
+#include "laser/laser_scan.hpp"
+#include "odometry/odometry_model.hpp"
+#include "scanmatch/prepared_scan.hpp"
+#include "scanmatch/scan_matcher.hpp"
+#include "slam/pose_graph.hpp"
+#include "slam/psm_slam_filter.hpp"
+#include "slam/psm_slam_params.hpp"
+
+namespace polarslam {
+
+struct PsmSlamStats {
+  size_t scans = 0;
+  size_t unusable_scans = 0;       ///< malformed, or too few usable readings to match
+  size_t tracked_scans = 0;        ///< matched against the reference and applied
+  size_t held_scans = 0;           ///< stationary: pose held
+  size_t match_failures = 0;       ///< PSM failed or the match quality was too low
+  size_t gate_rejections = 0;      ///< tracking matches outside the χ² gate
+  size_t keyframes = 0;
+  // Why a new reference was sought: no good match, moved too far, turned too far, overlap dropped.
+  size_t references_lost = 0, references_too_far = 0, references_turned = 0, references_overlap = 0;
+  size_t reference_reuses = 0;     ///< an existing reference scan taken up again
+  size_t candidate_matches = 0;    ///< matches tried against candidate reference scans
+  size_t loop_closures = 0;        ///< accepted matches with old reference scans
+  size_t loop_failed_matches = 0;  ///< old candidates PSM did not converge on
+  size_t loop_poor_matches = 0;    ///< ... converged, but error index or overlap too poor
+  size_t loop_gate_rejections = 0; ///< ... good, but outside the χ² gate of the prediction
+  size_t loop_unconfirmed = 0;     ///< ... good, but a wide prior and no second closure agreeing (yet)
+  size_t optimizations = 0;
+  size_t rejected_loop_edges = 0;  ///< loop edges the optimiser found inconsistent
+  double optimization_seconds = 0.0;
+  double last_optimization_seconds = 0.0;
+  size_t odometry_rejected = 0;
+  size_t odometry_faults = 0;      ///< scans whose odometry step disagreed with a better match
+  size_t filter_flushes = 0;
+};
+
+/// What one scan did.
+struct PsmSlamScanResult {
+  PoseStamped pose;            ///< robot pose in the map frame after this scan
+  bool usable = false;
+  bool tracked = false;
+  bool held = false;
+  bool new_keyframe = false;
+  bool loop_closed = false;
+  bool optimized = false;
+};
+
+class PsmSlam {
+ public:
+  explicit PsmSlam(PsmSlamParams params = {});
+
+  /// Cumulative odometry. Bad readings are counted and ignored.
+  void addOdometry(const OdometryReading& reading);
+  /// One laser scan; never throws for bad content (malformed scans count as unusable).
+  PsmSlamScanResult addScan(const LaserScan& scan);
+  /// Optimises the pose graph now and moves the filter and the trajectory with it.
+  PoseGraphOptimizationSummary optimize();
+
+  /// One pose per scan, in input order, following the current pose graph.
+  std::vector<PoseStamped> trajectory() const;
+  const PoseGraph& graph() const { return graph_; }
+  const PsmSlamStats& stats() const { return stats_; }
+  const PsmSlamParams& params() const { return params_; }
+  /// Whether anything has been received yet (the map frame is set by the first message).
+  bool started() const { return started_; }
+  Pose2 currentPose() const { return filter_.robotPose(); }
+  Mat3 currentCovariance() const { return filter_.robotCovariance(); }
+  const PsmSlamFilter& filter() const { return filter_; }
+
+ private:
+  struct Keyframe {
+    int64_t id = 0;
+    int64_t utime = 0;
+    Pose2 laser_mount;
+    PreparedScan scan;
+  };
+  /// A match of the current scan with one reference scan, as a robot-frame observation.
+  struct Observation {
+    int64_t keyframe = -1;
+    Pose2 z;                  ///< robot pose in the keyframe's robot frame
+    Mat3 R = Mat3::Zero();
+    double overlap = 0.0;
+    double error_index = 0.0;
+  };
+  struct TrajectoryRecord {
+    int64_t utime = 0;
+    int64_t anchor = -1;      ///< keyframe id; -1 = `relative` is absolute
+    Pose2 relative;
+    Mat3 cov = Mat3::Zero();
+  };
+  /// An unconfirmed loop closure: where the filter had the robot, where the match put it.
+  struct LoopHypothesis {
+    size_t scan = 0;
+    Pose2 robot, map_pose;
+  };
+  struct Candidate {
+    int64_t id = 0;
+    bool old = false;         ///< a loop-closure candidate
+    double distance = 0.0;    ///< predicted, m, plus an angle term
+    RelativePosePrediction prediction;
+  };
+
+  void start(const Pose2& pose);
+  void predictTo(int64_t utime);
+  std::optional<Observation> matchKeyframe(const Keyframe& keyframe, const PreparedScan& scan, const Pose2& mount,
+                                           const RelativePosePrediction& prior, bool loop_candidate, bool wide_search);
+  /// Initial guesses for a loop-closure match: the prediction, and with `wide` a grid over its
+  /// uncertainty when that is wider than PSM's basin.
+  std::vector<Pose2> loopGuesses(const RelativePosePrediction& prior, bool wide) const;
+  /// Matches the scan against the active reference from the odometry prior, and from the
+  /// previous motion when the two disagree (stale odometry); the better match wins.
+  std::optional<Observation> trackReference(const PreparedScan& scan, const Pose2& mount);
+  bool goodMatch(const Observation& o, bool loop_candidate) const;
+  bool robotStill(const Observation& tracked) const;
+  bool needsNewReference(const std::optional<Observation>& tracked);
+  bool isOld(int64_t keyframe) const;
+  /// Loop-closure match with an old reference: gated, and confirmed by a second closure when the
+  /// prior is too wide for the gate to tell look-alike places apart. True if applied.
+  bool applyLoopClosure(const Candidate& c, const Observation& o);
+  bool needsConfirmation(const RelativePosePrediction& prediction) const;
+  bool confirmedByHypothesis(const Pose2& robot, const Pose2& map_pose) const;
+  std::vector<Candidate> referenceCandidates() const;
+  /// Matches candidates, then reuses one or adds the scan as a keyframe. True if a loop closed.
+  bool selectReference(const LaserScan& scan, PreparedScan& prepared, const std::optional<Observation>& tracked);
+  void reuseReference(const Observation& chosen, const std::vector<Observation>& accepted);
+  void addKeyframe(const LaserScan& scan, PreparedScan prepared, const std::vector<Observation>& accepted,
+                   const std::optional<RelativePosePrediction>& odometry_link, int64_t previous);
+  void addGraphEdge(int64_t from, int64_t to, const Pose2& z, const Mat3& R, PoseGraphEdgeKind kind);
+  void marginaliseOldKeyframes();
+  void marginaliseKeyframe(int64_t id);
+  void syncGraphFromFilter();
+  void record(int64_t utime, PsmSlamScanResult& result);
+  const Keyframe& keyframe(int64_t id) const { return keyframes_[static_cast<size_t>(id)]; }
+
+  PsmSlamParams params_;
+  ScanMatcher matcher_;
+  PsmSlamFilter filter_;
+  PoseGraph graph_;
+  std::vector<Keyframe> keyframes_;        ///< by id (ids are 0, 1, 2, ...)
+  std::set<int64_t> filter_keyframes_;     ///< ids still in the filter
+  std::vector<LoopHypothesis> hypotheses_;
+  std::set<int64_t> skeleton_;             ///< older keyframes kept in the filter for loop closure
+  std::vector<TrajectoryRecord> records_;
+  PsmSlamStats stats_;
+
+  bool started_ = false;
+  OdometryIntegrator odometry_;
+  bool have_odometry_ = false;
+  Pose2 pending_motion_;                   ///< odometry since the last scan
+  Mat3 pending_cov_ = Mat3::Zero();
+  double pending_rotation_ = 0.0;          ///< |Δθ| summed since the last scan
+  bool odometry_still_ = false;            ///< odometry did not move between the last two scans
+  int64_t filter_utime_ = 0;               ///< time the filter's robot pose refers to
+  std::optional<int64_t> last_scan_utime_;
+  Pose2 last_scan_pose_;
+  Pose2 last_scan_motion_;                 ///< robot motion between the last two scans
+  int64_t keyframes_at_last_optimization_ = 0;
+  bool loop_pending_ = false;              ///< closures not yet in an optimisation
+};
+
+}  // namespace polarslam

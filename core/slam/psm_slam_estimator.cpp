@@ -1,0 +1,145 @@
+#include "slam/psm_slam_estimator.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <chrono>
+#include <stdexcept>
+
+#include "grid/grid_files.hpp"
+#include "grid/occupancy_grid.hpp"
+#include "io/plot.hpp"
+
+namespace polarslam {
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+nlohmann::json optimizationJson(const PoseGraphOptimizationSummary& s) {
+  return {{"solved", s.solved},           {"iterations", s.iterations},     {"rounds", s.rounds},
+          {"initial_cost", s.initial_cost}, {"final_cost", s.final_cost},   {"seconds", s.seconds},
+          {"rejected_loops", s.rejected_loops}, {"nodes", s.nodes},        {"edges", s.edges},
+          {"message", s.message}};
+}
+
+}  // namespace
+
+PsmSlamEstimatorConfig loadPsmSlamEstimatorConfig(const std::string& yaml_path) {
+  PsmSlamEstimatorConfig config;
+  config.slam = loadPsmSlamParams(yaml_path, {"grid_resolution", "grid_max_range", "grid_scans"});
+  try {
+    const YAML::Node root = YAML::LoadFile(yaml_path);
+    if (root && root.IsMap()) {
+      if (root["grid_resolution"]) config.map.resolution = root["grid_resolution"].as<double>();
+      if (root["grid_max_range"]) config.map.max_range = root["grid_max_range"].as<double>();
+      if (root["grid_scans"]) {
+        const std::string which = root["grid_scans"].as<std::string>();
+        if (which != "keyframes" && which != "all") throw std::runtime_error("grid_scans must be 'keyframes' or 'all'");
+        config.map.all_scans = which == "all";
+      }
+    }
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(yaml_path + ": " + e.what());
+  }
+  if (!(config.map.resolution > 0.0)) throw std::runtime_error(yaml_path + ": grid_resolution must be positive");
+  return config;
+}
+
+PsmSlamEstimator::PsmSlamEstimator(PsmSlamEstimatorConfig config) : config_(std::move(config)), slam_(config_.slam) {}
+
+void PsmSlamEstimator::onOdometry(const OdometryReading& odometry) {
+  const auto start = std::chrono::steady_clock::now();
+  slam_.addOdometry(odometry);
+  slam_seconds_ += secondsSince(start);
+}
+
+void PsmSlamEstimator::onLaser(const LaserScan& scan) {
+  const auto start = std::chrono::steady_clock::now();
+  const PsmSlamScanResult result = slam_.addScan(scan);
+  slam_seconds_ += secondsSince(start);
+  if (config_.map.all_scans ? result.usable : result.new_keyframe) {
+    map_scans_.push_back(scan);
+    map_scan_index_.push_back(scans_seen_);
+  }
+  ++scans_seen_;
+}
+
+nlohmann::json psmSlamReportJson(const PsmSlam& slam, const PoseGraphOptimizationSummary& final_optimization) {
+  const PsmSlamStats& s = slam.stats();
+  const PoseGraph& g = slam.graph();
+  size_t inactive = 0;
+  for (const auto& e : g.edges()) inactive += e.active ? 0 : 1;
+  return {{"scans", s.scans},
+          {"unusable_scans", s.unusable_scans},
+          {"tracked_scans", s.tracked_scans},
+          {"held_scans", s.held_scans},
+          {"match_failures", s.match_failures},
+          {"gate_rejections", s.gate_rejections},
+          {"keyframes", s.keyframes},
+          {"filter_keyframes", slam.filter().keyframeCount()},
+          {"reference_reuses", s.reference_reuses},
+          {"new_reference_reasons",
+           {{"lost", s.references_lost}, {"too_far", s.references_too_far}, {"turned", s.references_turned},
+            {"overlap", s.references_overlap}}},
+          {"candidate_matches", s.candidate_matches},
+          {"loop_closures", s.loop_closures},
+          {"loop_failed_matches", s.loop_failed_matches}, {"loop_poor_matches", s.loop_poor_matches}, {"loop_gate_rejections", s.loop_gate_rejections}, {"loop_unconfirmed", s.loop_unconfirmed},
+          {"optimizations", s.optimizations},
+          {"optimization_seconds", s.optimization_seconds},
+          {"rejected_loop_edges", s.rejected_loop_edges},
+          {"odometry_rejected", s.odometry_rejected}, {"odometry_faults", s.odometry_faults},
+          {"filter_flushes", s.filter_flushes},
+          {"graph",
+           {{"nodes", g.nodes().size()},
+            {"odometry_edges", g.countEdges(PoseGraphEdgeKind::Odometry)},
+            {"match_edges", g.countEdges(PoseGraphEdgeKind::Match)},
+            {"loop_edges", g.countEdges(PoseGraphEdgeKind::Loop)},
+            {"inactive_edges", inactive}}},
+          {"final_optimization", optimizationJson(final_optimization)}};
+}
+
+void PsmSlamEstimator::finish(const std::string& out_dir, nlohmann::json& report) {
+  const auto start = std::chrono::steady_clock::now();
+  const PoseGraphOptimizationSummary summary = slam_.optimize();
+  trajectory_ = slam_.trajectory();
+  slam_seconds_ += secondsSince(start);
+  nlohmann::json section = psmSlamReportJson(slam_, summary);
+  section["slam_seconds"] = slam_seconds_;
+  report["psm_slam"] = section;
+  if (!out_dir.empty()) writeMap(out_dir, report);
+}
+
+void PsmSlamEstimator::writeMap(const std::string& out_dir, nlohmann::json& report) {
+  if (map_scans_.empty()) {
+    report["grid"] = {{"written", false}, {"reason", "no usable scans"}};
+    return;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<Pose2> poses;
+  poses.reserve(map_scans_.size());
+  for (const size_t i : map_scan_index_) poses.push_back(trajectory_[i].pose);
+  GridOptions options;
+  options.resolution = config_.map.resolution;
+  options.max_range = config_.map.max_range;
+  const OccupancyGrid grid = buildGrid(map_scans_, poses, options);
+  GridPicture picture;
+  picture.title = "psm-slam: occupancy grid of the reference scans";
+  PlotSeries path{"trajectory", {}, seriesColor(0), 1.2, 0};
+  for (const auto& p : trajectory_) path.points.push_back(p.pose.translation());
+  PlotSeries references{"reference scans", {}, seriesColor(1), 0, 2.0};
+  for (const auto& p : poses) references.points.push_back(p.translation());
+  picture.paths = {path, references};
+  const GridSlice slice = grid.slice();
+  const GridFiles files = writeGridFiles(out_dir, grid, slice, picture);
+  report["grid"] = {{"written", true},
+                    {"scans", map_scans_.size()},
+                    {"resolution_m", options.resolution},
+                    {"max_range_m", options.max_range},
+                    {"width", slice.width},
+                    {"height", slice.height},
+                    {"files", {files.ot, files.bt, files.pgm, files.yaml, files.png}},
+                    {"seconds", secondsSince(start)}};
+}
+
+}  // namespace polarslam

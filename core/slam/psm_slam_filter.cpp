@@ -1,0 +1,275 @@
+#include "slam/psm_slam_filter.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace polarslam {
+namespace {
+
+Vec3 measurementResidual(const Pose2& z, const Pose2& h) {
+  return {z.x - h.x, z.y - h.y, wrapAngle(z.theta - h.theta)};
+}
+
+}  // namespace
+
+RelativePoseJacobians relativePoseJacobians(const Pose2& keyframe, const Pose2& robot) {
+  const double c = std::cos(keyframe.theta), s = std::sin(keyframe.theta);
+  const Pose2 h = between(keyframe, robot);
+  RelativePoseJacobians J;
+  J.robot << c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0;
+  J.keyframe << -c, -s, h.y, s, -c, -h.x, 0.0, 0.0, -1.0;
+  return J;
+}
+
+void PsmSlamFilter::reset(const Pose2& pose, const Mat3& cov) {
+  x_ = Eigen::VectorXd::Zero(3 * 16);
+  P_ = Eigen::MatrixXd::Zero(3 * 16, 3 * 16);
+  slot_end_ = 1;
+  free_slots_.clear();
+  slot_of_.clear();
+  active_id_ = -1;
+  active_slot_ = 0;
+  x_.head<3>() = pose.vec();
+  P_.topLeftCorner<3, 3>() = cov;
+  loadLocal();
+  flushes_ = 0;
+}
+
+void PsmSlamFilter::loadLocal() {
+  local_x_.setZero();
+  local_P_.setZero();
+  local_x_.head<3>() = x_.head<3>();
+  local_P_.topLeftCorner<3, 3>() = P_.topLeftCorner<3, 3>();
+  if (active_slot_ != 0) {
+    const Eigen::Index a = offset(active_slot_);
+    local_x_.tail<3>() = x_.segment<3>(a);
+    local_P_.block<3, 3>(0, 3) = P_.block<3, 3>(0, a);
+    local_P_.block<3, 3>(3, 0) = P_.block<3, 3>(a, 0);
+    local_P_.block<3, 3>(3, 3) = P_.block<3, 3>(a, a);
+  }
+  phi_.setIdentity();
+  psi_.setZero();
+  theta_.setZero();
+  pending_ = false;
+}
+
+void PsmSlamFilter::flush() {
+  const Eigen::Index n = static_cast<Eigen::Index>(dimension());
+  const Eigen::Index a = offset(active_slot_);
+  if (pending_ && active_slot_ != 0) {
+    // W = P(:, A) at the last flush; the rows of A itself are overwritten below.
+    Eigen::MatrixXd W(n, 6);
+    W.leftCols<3>() = P_.block(0, 0, n, 3);
+    W.rightCols<3>() = P_.block(0, a, n, 3);
+    const Eigen::MatrixXd W_psi = W * psi_;
+    P_.topLeftCorner(n, n).noalias() -= W_psi * W.transpose();
+    x_.head(n).noalias() += W * theta_;
+    const Eigen::MatrixXd cross = W * phi_.transpose();  // P(B, A) now
+    P_.block(0, 0, n, 3) = cross.leftCols<3>();
+    P_.block(0, a, n, 3) = cross.rightCols<3>();
+    P_.block(0, 0, 3, n) = cross.leftCols<3>().transpose();
+    P_.block(a, 0, 3, n) = cross.rightCols<3>().transpose();
+    ++flushes_;
+  }
+  x_.head<3>() = local_x_.head<3>();
+  P_.topLeftCorner<3, 3>() = local_P_.topLeftCorner<3, 3>();
+  if (active_slot_ != 0) {
+    x_.segment<3>(a) = local_x_.tail<3>();
+    P_.block<3, 3>(0, a) = local_P_.block<3, 3>(0, 3);
+    P_.block<3, 3>(a, 0) = local_P_.block<3, 3>(3, 0);
+    P_.block<3, 3>(a, a) = local_P_.block<3, 3>(3, 3);
+  }
+  loadLocal();
+}
+
+void PsmSlamFilter::predict(const Pose2& motion, const Mat3& motion_cov) {
+  const Pose2 robot = robotPose();
+  Mat6 F = Mat6::Identity();
+  F.topLeftCorner<3, 3>() = composeJacobianA(robot, motion);
+  const Mat3 Jb = composeJacobianB(robot);
+  local_x_.head<3>() = (robot * motion).vec();
+  local_P_ = F * local_P_ * F.transpose();
+  local_P_.topLeftCorner<3, 3>() += Jb * motion_cov * Jb.transpose();
+  phi_ = F * phi_;
+  pending_ = true;
+}
+
+size_t PsmSlamFilter::slotOf(int64_t id) const {
+  const auto it = slot_of_.find(id);
+  if (it == slot_of_.end()) throw std::out_of_range("keyframe " + std::to_string(id) + " is not in the filter");
+  return it->second;
+}
+
+void PsmSlamFilter::ensureCapacity(size_t slots) {
+  const Eigen::Index needed = offset(slots);
+  if (needed <= x_.size()) return;
+  const Eigen::Index grown = std::max<Eigen::Index>(needed, 2 * x_.size());
+  const Eigen::Index n = static_cast<Eigen::Index>(dimension());
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(grown);
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(grown, grown);
+  x.head(n) = x_.head(n);
+  P.topLeftCorner(n, n) = P_.topLeftCorner(n, n);
+  x_.swap(x);
+  P_.swap(P);
+}
+
+size_t PsmSlamFilter::allocateSlot() {
+  if (!free_slots_.empty()) {
+    const size_t slot = free_slots_.back();
+    free_slots_.pop_back();
+    return slot;
+  }
+  ensureCapacity(slot_end_ + 1);
+  return slot_end_++;
+}
+
+void PsmSlamFilter::addKeyframe(int64_t id) {
+  if (hasKeyframe(id)) throw std::invalid_argument("keyframe " + std::to_string(id) + " is already in the filter");
+  flush();
+  const size_t slot = allocateSlot();
+  const Eigen::Index s = offset(slot), n = static_cast<Eigen::Index>(dimension());
+  // The new keyframe is a copy of the robot pose: its row and column are the robot's.
+  x_.segment<3>(s) = x_.head<3>();
+  P_.block(s, 0, 3, n) = P_.block(0, 0, 3, n);
+  P_.block(0, s, n, 3) = P_.block(0, 0, n, 3);
+  P_.block<3, 3>(s, s) = P_.topLeftCorner<3, 3>();
+  slot_of_[id] = slot;
+  active_id_ = id;
+  active_slot_ = slot;
+  loadLocal();
+}
+
+void PsmSlamFilter::removeKeyframe(int64_t id) {
+  if (id == active_id_) throw std::logic_error("the active keyframe cannot be removed from the filter");
+  const size_t slot = slotOf(id);
+  flush();
+  const Eigen::Index s = offset(slot), n = static_cast<Eigen::Index>(dimension());
+  x_.segment<3>(s).setZero();
+  P_.block(s, 0, 3, n).setZero();
+  P_.block(0, s, n, 3).setZero();
+  slot_of_.erase(id);
+  free_slots_.push_back(slot);
+  loadLocal();
+}
+
+void PsmSlamFilter::setActiveKeyframe(int64_t id) {
+  if (id == active_id_) return;
+  const size_t slot = slotOf(id);
+  flush();
+  active_id_ = id;
+  active_slot_ = slot;
+  loadLocal();
+}
+
+Pose2 PsmSlamFilter::keyframePose(int64_t id) const {
+  const size_t slot = slotOf(id);
+  if (slot == active_slot_) return Pose2(local_x_.tail<3>());
+  const Eigen::Index s = offset(slot), a = offset(active_slot_);
+  Vec3 x = x_.segment<3>(s);
+  if (pending_) x += P_.block<3, 3>(s, 0) * theta_.head<3>() + P_.block<3, 3>(s, a) * theta_.tail<3>();
+  return Pose2(x);
+}
+
+Mat3 PsmSlamFilter::keyframeCovariance(int64_t id) const {
+  const size_t slot = slotOf(id);
+  if (slot == active_slot_) return local_P_.bottomRightCorner<3, 3>();
+  const Eigen::Index s = offset(slot), a = offset(active_slot_);
+  Mat3 P = P_.block<3, 3>(s, s);
+  if (pending_) {
+    Mat36 P_kA;
+    P_kA << P_.block<3, 3>(s, 0), P_.block<3, 3>(s, a);
+    P -= P_kA * psi_ * P_kA.transpose();
+  }
+  return P;
+}
+
+RelativePosePrediction PsmSlamFilter::predictRelative(int64_t id) const {
+  const size_t slot = slotOf(id);
+  const Pose2 robot = robotPose();
+  const Pose2 keyframe = keyframePose(id);
+  Mat3 P_rr = robotCovariance(), P_kk, P_rk;
+  if (slot == active_slot_) {
+    P_kk = local_P_.bottomRightCorner<3, 3>();
+    P_rk = local_P_.topRightCorner<3, 3>();
+  } else {
+    const Eigen::Index s = offset(slot), a = offset(active_slot_);
+    P_kk = keyframeCovariance(id);
+    Eigen::Matrix<double, 6, 3> P_Ak;
+    P_Ak << P_.block<3, 3>(0, s), P_.block<3, 3>(a, s);
+    P_rk = (phi_ * P_Ak).topRows<3>();
+  }
+  const RelativePoseJacobians J = relativePoseJacobians(keyframe, robot);
+  RelativePosePrediction prediction;
+  prediction.mean = between(keyframe, robot);
+  prediction.cov = J.robot * P_rr * J.robot.transpose() + J.keyframe * P_kk * J.keyframe.transpose() +
+                   J.robot * P_rk * J.keyframe.transpose() + J.keyframe * P_rk.transpose() * J.robot.transpose();
+  return prediction;
+}
+
+FilterUpdateOutcome PsmSlamFilter::update(int64_t id, const Pose2& z, const Mat3& R, double chi2_gate) {
+  setActiveKeyframe(id);
+  const Pose2 robot = robotPose(), keyframe(local_x_.tail<3>());
+  const RelativePoseJacobians J = relativePoseJacobians(keyframe, robot);
+  Mat36 H;
+  H << J.robot, J.keyframe;
+  const Vec3 nu = measurementResidual(z, between(keyframe, robot));
+  const Mat3 S = H * local_P_ * H.transpose() + R;
+  const Eigen::LDLT<Mat3> S_ldlt(S);
+  FilterUpdateOutcome outcome;
+  outcome.chi2 = nu.dot(S_ldlt.solve(nu));
+  if (!(outcome.chi2 <= chi2_gate) || S_ldlt.info() != Eigen::Success) return outcome;
+
+  const Mat3 S_inv = S_ldlt.solve(Mat3::Identity());
+  const Eigen::Matrix<double, 6, 3> K = local_P_ * H.transpose() * S_inv;
+  const Mat6 I_KH = Mat6::Identity() - K * H;
+  const Mat36 H_phi = H * phi_;
+  psi_ += H_phi.transpose() * S_inv * H_phi;
+  theta_ += H_phi.transpose() * S_inv * nu;
+  phi_ = I_KH * phi_;
+  local_x_ += K * nu;
+  local_x_(2) = wrapAngle(local_x_(2));
+  local_x_(5) = wrapAngle(local_x_(5));
+  // Joseph form: stays symmetric positive semi-definite under rounding.
+  local_P_ = I_KH * local_P_ * I_KH.transpose() + K * R * K.transpose();
+  pending_ = true;
+  outcome.accepted = true;
+  return outcome;
+}
+
+void PsmSlamFilter::setKeyframePoses(const std::unordered_map<int64_t, Pose2>& poses) {
+  flush();
+  const Pose2 robot = robotPose();
+  const bool moves_active = active_slot_ != 0 && poses.count(active_id_) != 0;
+  const Pose2 robot_in_active = moves_active ? between(keyframePose(active_id_), robot) : Pose2();
+  for (const auto& [id, pose] : poses) {
+    const auto it = slot_of_.find(id);
+    if (it != slot_of_.end()) x_.segment<3>(offset(it->second)) = pose.vec();
+  }
+  if (moves_active) x_.head<3>() = (poses.at(active_id_) * robot_in_active).vec();
+  loadLocal();
+}
+
+std::vector<int64_t> PsmSlamFilter::keyframeIds() const {
+  std::vector<int64_t> ids;
+  ids.reserve(slot_of_.size());
+  for (const auto& [id, slot] : slot_of_) ids.push_back(id);
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+Eigen::VectorXd PsmSlamFilter::stateMean() {
+  flush();
+  return x_.head(static_cast<Eigen::Index>(dimension()));
+}
+
+Eigen::MatrixXd PsmSlamFilter::stateCovariance() {
+  flush();
+  const Eigen::Index n = static_cast<Eigen::Index>(dimension());
+  return P_.topLeftCorner(n, n);
+}
+
+}  // namespace polarslam

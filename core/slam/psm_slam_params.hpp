@@ -1,0 +1,113 @@
+#pragma once
+// Parameters of PSM SLAM (psm_slam.hpp), SI units and radians. Defaults were tuned on the MIT
+// CSAIL log and checked on the simulated office (README-psm-slam.md).
+#include <set>
+#include <string>
+
+#include "odometry/odometry_model.hpp"
+#include "scanmatch/psm_params.hpp"
+#include "slam/pose_graph.hpp"
+
+namespace polarslam {
+
+struct PsmSlamParams {
+  PsmParams psm;                         ///< the matcher's own parameters
+  MatchMethod method = MatchMethod::Psm;
+  OdometryModelParams odometry;          ///< prediction: the §17.6 model
+
+  // --- prediction ---
+  /// Random-walk noise added per second of elapsed time, on top of the odometry model: real
+  /// odometry goes stale for a scan or two and wheels slip, and a prior tighter than the match
+  /// would make the χ² gate reject good matches.
+  double time_noise_xy = 2e-4;           ///< m²/s
+  double time_noise_theta = 3e-4;        ///< rad²/s
+  /// Without any odometry the prior is the previous scan-to-scan motion (constant velocity)
+  /// with this much extra noise per second.
+  double no_odometry_noise_xy = 0.5;     ///< m²/s
+  double no_odometry_noise_theta = 0.5;  ///< rad²/s
+
+  /// When the odometry prior and the previous scan-to-scan motion differ by more than this, the
+  /// scan is matched from both and the better match is kept.
+  double odometry_check_translation = 0.05;  ///< m
+  double odometry_check_rotation = deg2rad(3.0);
+
+  // --- matches ---
+  double match_cov_scale = 1.0;          ///< multiplies the matcher's covariance
+  /// The smallest match covariance the filter accepts (the matcher's WLS covariance can be
+  /// optimistic on feature-rich scans).
+  double min_match_sigma_xy = 0.01;      ///< m
+  double min_match_sigma_theta = deg2rad(0.3);
+  double max_error_index = 0.10;         ///< m: a larger mean residual is a bad match
+  /// Associated bearings over the smaller of the two scans' usable readings.
+  double min_overlap = 0.35;
+  double chi2_gate = 16.27;              ///< χ²₃(0.999) on the innovation of a tracking match
+
+  // --- reference scans (keyframes) ---
+  double keyframe_distance = 0.6;        ///< m from the active reference scan
+  double keyframe_angle = deg2rad(25.0); ///< rad from the active reference scan
+  double keyframe_min_overlap = 0.6;     ///< below this overlap a new reference is sought
+  /// An existing reference scan is reused instead of adding one when the robot is this close
+  /// to it (fractions of keyframe_distance / keyframe_angle) and the match overlaps as much.
+  double reuse_fraction = 0.5;
+  /// The filter keeps the last `filter_window` keyframes, and of the older ones only a sparse
+  /// skeleton for loop closure: an older keyframe within `skeleton_spacing` (and
+  /// `skeleton_heading` of heading) of an older one already kept is marginalised out of the
+  /// filter (it stays in the pose graph and the map). The filter's cost per new keyframe is
+  /// O(n²) in the keyframes it holds, so this keeps it proportional to the area mapped, not to
+  /// the length of the run.
+  int filter_window = 30;
+  double skeleton_spacing = 1.5;         ///< m
+  double skeleton_heading = deg2rad(60.0);
+  /// Hard cap on keyframes in the filter: beyond it the oldest go, skeleton or not.
+  size_t max_filter_keyframes = 1500;
+
+  // --- stationary robot ---
+  double stationary_odometry_translation = 1e-3;    ///< m between scans: odometry says still
+  double stationary_odometry_rotation = deg2rad(0.05);
+  double stationary_match_translation = 0.03;       ///< m: the match agrees it is still
+  double stationary_match_rotation = deg2rad(1.0);
+
+  // --- loop closure ---
+  /// Keyframes the robot may be within this distance of (allowing for 3σ of pose uncertainty
+  /// along the line to them) are loop-closure candidates.
+  double loop_search_radius = 2.0;       ///< m
+  double loop_max_heading_difference = deg2rad(60.0);
+  double loop_candidate_sigmas = 3.0;    ///< Mahalanobis neighbourhood size
+  /// Keyframes at least this many ids older than the active one count as loop closures.
+  int loop_min_keyframe_gap = 15;
+  int max_candidates_per_scan = 3;       ///< matches tried per new-reference decision
+  double loop_max_error_index = 0.06;    ///< m: stricter than tracking
+  double loop_min_overlap = 0.5;
+  double loop_chi2_gate = 11.34;         ///< χ²₃(0.99) against the filter's prediction
+  /// When the predicted position's σ exceeds this, a closure waits for a second one from
+  /// another scan, within loop_confirm_scans scans, that agrees on the robot's motion in between
+  /// within loop_confirm_translation / _rotation; the confirmed one then passes a wider gate
+  /// (the filter is often over-confident after a long excursion).
+  double loop_confirm_sigma = 0.15;      ///< m
+  int loop_confirm_scans = 20;
+  double loop_confirm_translation = 0.10;  ///< m
+  double loop_confirm_rotation = deg2rad(2.0);
+  double loop_confirmed_chi2_gate = 100.0;
+  /// When the prior is wider than PSM's basin, guesses on a grid of this spacing over its
+  /// loop_candidate_sigmas ellipse (at most loop_max_guesses, most likely first) are tried and
+  /// the best converged match kept; one such wide search per reference decision.
+  double loop_guess_spacing = 0.4;       ///< m
+  int loop_max_guesses = 24;
+  /// Orientation window of the matcher's first orientation step for loop candidates.
+  double loop_search_window = deg2rad(45.0);
+
+  // --- global optimisation ---
+  PoseGraphOptimizerOptions graph;
+  bool optimize_on_loop = true;
+  /// Loop closures within this many new keyframes of the last optimisation wait for the next one
+  /// (the filter has already applied them); the end of the run always optimises.
+  int min_keyframes_between_optimizations = 15;
+};
+
+/// Reads parameters from a YAML file (flat keys named as the fields above, plus `psm:` with
+/// max_range, search_window, initial_search_window, min_valid_points, decimation, covariance);
+/// unknown keys throw std::runtime_error naming them, so typos do not pass silently; keys in
+/// `other_keys` are left for the caller.
+PsmSlamParams loadPsmSlamParams(const std::string& yaml_path, const std::set<std::string>& other_keys = {});
+
+}  // namespace polarslam

@@ -1,0 +1,111 @@
+// polarslam-psm-slam: SLAM with polar scan matching. LASER + ODOMETRY → PSM_SLAM_POSE (pose_t,
+// frame "map", one per scan, with covariance) and PSM_SLAM_GRAPH (pose_graph_t, when the graph
+// has changed, at most every --graph-period seconds, and once more on exit). A thin shell over
+// core/slam/psm_slam.hpp, the class `polarslam run --pipeline psm-slam` runs.
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <iostream>
+
+#include "common/lcm_convert.hpp"
+#include "common/process_context.hpp"
+#include "pose_graph_message.hpp"
+#include "slam/psm_slam.hpp"
+
+using namespace polarslam;
+
+namespace {
+
+struct Channels {
+  std::string laser = "LASER", odometry = "ODOMETRY", pose = "PSM_SLAM_POSE", graph = "PSM_SLAM_GRAPH";
+};
+
+class GraphPublisher {
+ public:
+  GraphPublisher(ProcessContext& context, std::string channel, double period_s)
+      : context_(context),
+        channel_(std::move(channel)),
+        period_(std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(period_s))) {}
+
+  void changed() { dirty_ = true; }
+  void publishIfDue(const PsmSlam& slam, int64_t utime, bool force = false) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!dirty_ || (!force && now - last_ < period_)) return;
+    context_.publish(channel_, toLcm(slam.graph(), utime, seq_++, static_cast<int32_t>(slam.stats().optimizations),
+                                     slam.stats().last_optimization_seconds));
+    last_ = now;
+    dirty_ = false;
+  }
+
+ private:
+  ProcessContext& context_;
+  std::string channel_;
+  std::chrono::steady_clock::duration period_;
+  std::chrono::steady_clock::time_point last_{};
+  bool dirty_ = false;
+  int64_t seq_ = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"polarslam-psm-slam: SLAM with polar scan matching, loop closure and pose-graph optimisation"};
+  std::string url, config;
+  double graph_period = 1.0;
+  Channels channels;
+  app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
+  app.add_option("--config", config, "PSM SLAM parameters (YAML, keys of core/slam/psm_slam_params.hpp)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--graph-period", graph_period, "s between PSM_SLAM_GRAPH messages at most")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  app.add_option("--laser-channel", channels.laser)->capture_default_str();
+  app.add_option("--odometry-channel", channels.odometry)->capture_default_str();
+  app.add_option("--pose-channel", channels.pose)->capture_default_str();
+  app.add_option("--graph-channel", channels.graph)->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    PsmSlam slam(config.empty() ? PsmSlamParams{} : loadPsmSlamParams(config));
+    ProcessContext context("polarslam-psm-slam", url);
+    GraphPublisher graph(context, channels.graph, graph_period);
+    int64_t pose_seq = 0, last_utime = 0;
+    context.subscribe<polarslam::laser_scan_t>(channels.laser, [&](const polarslam::laser_scan_t& msg) {
+      LaserScan scan;
+      if (const std::string why = fromLcm(msg, scan); !why.empty()) {
+        context.reject(why);
+        return;
+      }
+      if (!context.checkSequence(channels.laser, msg.seq)) return;
+      const PsmSlamScanResult r = slam.addScan(scan);
+      if (!r.usable) context.reject("laser: too few usable readings to match");
+      context.publish(channels.pose, toLcm(r.pose, "map", pose_seq++));
+      if (r.new_keyframe || r.loop_closed || r.optimized) graph.changed();
+      last_utime = scan.utime;
+      graph.publishIfDue(slam, last_utime);
+      context.handled();
+    });
+    context.subscribe<polarslam::odometry_t>(channels.odometry, [&](const polarslam::odometry_t& msg) {
+      OdometryReading reading;
+      if (const std::string why = fromLcm(msg, reading); !why.empty()) {
+        context.reject(why);
+        return;
+      }
+      if (!context.checkSequence(channels.odometry, msg.seq)) return;
+      slam.addOdometry(reading);
+      context.handled();
+    });
+    context.run({}, [&] { graph.publishIfDue(slam, last_utime); });
+    if (slam.started()) {
+      slam.optimize();
+      graph.changed();
+      graph.publishIfDue(slam, last_utime, true);
+    }
+    const PsmSlamStats& s = slam.stats();
+    std::cerr << "polarslam-psm-slam: " << s.scans << " scans, " << s.keyframes << " reference scans, "
+              << s.loop_closures << " loop closures, " << s.optimizations << " optimisations\n";
+  } catch (const std::exception& e) {
+    std::cerr << "polarslam-psm-slam: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,216 @@
+// bench_psm_slam: PSM SLAM on a CARMEN log with Kümmerle relations (by default MIT CSAIL from
+// ../shared/data), next to chained PSM laser odometry and raw odometry, scored with the relation
+// metric; run time as a multiple of real time on one core (time inside the estimators only: the
+// log is parsed before the clock starts). Prints a table with the goals and writes JSON.
+//
+//   bench_psm_slam [--log X.clf --relations R] [--out DIR] [--config psm_slam.yaml]
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iostream>
+
+#include "eval/relation_metric.hpp"
+#include "io/carmen.hpp"
+#include "io/relations.hpp"
+#include "io/tum.hpp"
+#include "scanmatch/laser_odometry.hpp"
+#include "slam/estimator.hpp"
+#include "slam/psm_slam.hpp"
+
+using namespace polarslam;
+
+namespace {
+
+constexpr double kCartographerTranslation = 0.0319;  ///< m, Hess et al. 2016 Table II, MIT CSAIL
+constexpr double kCartographerRotation = 0.369;      ///< deg
+constexpr double kRealTimeGoal = 100.0;
+
+struct Result {
+  std::string name;
+  std::vector<PoseStamped> trajectory;
+  double seconds = 0.0;
+  nlohmann::json extra;
+};
+
+double secondsOf(const std::function<void()>& work) {
+  const auto start = std::chrono::steady_clock::now();
+  work();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+Result runOdometry(const CarmenLog& log) {
+  Result r{"raw odometry", {}, 0.0, {}};
+  OdometryEstimator odometry;
+  r.seconds = secondsOf([&] {
+    for (const auto& e : log.events)
+      if (!e.isLaser()) odometry.onOdometry(e.odometry());
+  });
+  r.trajectory = odometry.trajectory();
+  return r;
+}
+
+Result runLaserOdometry(const CarmenLog& log) {
+  Result r{"PSM laser odometry (keyframes, PSM engineer's LaserOdometry)", {}, 0.0, {}};
+  LaserOdometry odometry;
+  size_t rejected = 0;
+  r.seconds = secondsOf([&] {
+    for (const auto& e : log.events) {
+      if (!e.isLaser()) {
+        odometry.addOdometry(e.odometry());
+      } else if (validateScan(e.laser()).empty()) {
+        odometry.addScan(e.laser());
+      } else {
+        ++rejected;
+      }
+    }
+  });
+  r.trajectory = odometry.trajectory();
+  r.extra = {{"keyframes", odometry.keyframes()}, {"failed_matches", odometry.failedMatches()},
+             {"held_scans", odometry.heldScans()}, {"rejected_scans", rejected}};
+  return r;
+}
+
+Result runPsmSlam(const CarmenLog& log, const PsmSlamParams& params, std::vector<PoseStamped>& online_trajectory) {
+  Result r{"PSM SLAM", {}, 0.0, {}};
+  PsmSlam slam(params);
+  PoseGraphOptimizationSummary final_summary;
+  std::vector<PoseStamped> online;
+  online.reserve(static_cast<size_t>(log.laserCount()));
+  r.seconds = secondsOf([&] {
+    for (const auto& e : log.events)
+      if (e.isLaser()) online.push_back(slam.addScan(e.laser()).pose);
+      else slam.addOdometry(e.odometry());
+    final_summary = slam.optimize();
+  });
+  online_trajectory = std::move(online);
+  r.trajectory = slam.trajectory();
+  const PsmSlamStats& s = slam.stats();
+  r.extra = {{"keyframes", s.keyframes},           {"loop_closures", s.loop_closures},
+             {"reference_reuses", s.reference_reuses}, {"optimizations", s.optimizations},
+             {"optimization_seconds", s.optimization_seconds}, {"held_scans", s.held_scans}, {"odometry_faults", s.odometry_faults},
+             {"tracked_scans", s.tracked_scans},    {"match_failures", s.match_failures},
+             {"gate_rejections", s.gate_rejections}, {"loop_failed_matches", s.loop_failed_matches}, {"loop_poor_matches", s.loop_poor_matches}, {"loop_gate_rejections", s.loop_gate_rejections}, {"loop_unconfirmed", s.loop_unconfirmed},
+             {"rejected_loop_edges", s.rejected_loop_edges}, {"filter_flushes", s.filter_flushes},
+             {"final_optimization_seconds", final_summary.seconds},
+             {"new_reference_reasons",
+              {{"lost", s.references_lost}, {"too_far", s.references_too_far}, {"turned", s.references_turned},
+               {"overlap", s.references_overlap}}},
+             {"filter_keyframes", slam.filter().keyframeCount()}};
+  return r;
+}
+
+nlohmann::json statsJson(const ErrorStatistics& s) {
+  return {{"mean", s.mean}, {"std", s.std}, {"min", s.min}, {"max", s.max}, {"count", s.count}};
+}
+
+/// Relations whose two poses are less than 30 s apart (the "local" accuracy of the notes' appendix).
+std::vector<Relation> localRelations(const std::vector<Relation>& relations) {
+  std::vector<Relation> local;
+  for (const auto& r : relations)
+    if (std::llabs(r.t2 - r.t1) < 30'000'000) local.push_back(r);
+  return local;
+}
+
+void printRow(const std::string& name, const RelationMetric& all, const RelationMetric& local, double realtime) {
+  std::printf("%-28s %7.4f ± %-7.4f %6.3f ± %-6.3f %7.3f %5zu | %7.4f | %8.0fx\n", name.c_str(), all.translation.mean,
+              all.translation.std, all.rotation_deg.mean, all.rotation_deg.std, all.translation.max, all.evaluated,
+              local.translation.mean, realtime);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"bench_psm_slam: PSM SLAM vs PSM laser odometry vs raw odometry, relation metric and speed"};
+  const std::string data = POLARSLAM_SHARED_DATA_DIR;
+  std::string log_path = data + "/mit-csail/mit-csail.clf", relations_path = data + "/mit-csail/mit-csail.relations";
+  std::string out, config;
+  app.add_option("--log", log_path, "CARMEN log")->capture_default_str();
+  app.add_option("--relations", relations_path, "Kümmerle relations of that log")->capture_default_str();
+  app.add_option("--out", out, "folder for bench.json and the trajectories (TUM)");
+  app.add_option("--config", config, "PSM SLAM parameters (YAML)")->check(CLI::ExistingFile);
+  CLI11_PARSE(app, argc, argv);
+
+  if (!std::filesystem::exists(log_path) || !std::filesystem::exists(relations_path)) {
+    std::cout << "SKIPPED: " << log_path << " or " << relations_path
+              << " not found (the public logs live in ../shared/data next to the project)\n";
+    return 0;
+  }
+  try {
+    const CarmenLog log = readCarmenLogFile(log_path);
+    const std::vector<Relation> relations = readRelations(relations_path), local = localRelations(relations);
+    int64_t first = 0, last = 0;
+    bool any = false;
+    for (const auto& e : log.events) {
+      if (!e.isLaser()) continue;
+      first = any ? std::min(first, e.utime()) : e.utime();
+      last = any ? std::max(last, e.utime()) : e.utime();
+      any = true;
+    }
+    const double duration = 1e-6 * static_cast<double>(last - first);
+    const PsmSlamParams params = config.empty() ? PsmSlamParams{} : loadPsmSlamParams(config);
+
+    std::vector<PoseStamped> online;
+    std::vector<Result> results{runOdometry(log), runLaserOdometry(log), runPsmSlam(log, params, online)};
+    std::printf("\n%s: %lld scans, %.1f s of data, %zu relations (%zu within 30 s)\n", log_path.c_str(),
+                static_cast<long long>(log.laserCount()), duration, relations.size(), local.size());
+    std::printf("%-28s %-17s %-15s %7s %5s | %7s | %9s\n", "estimator", "trans. err [m]", "rot. err [deg]", "max [m]",
+                "n", "local", "realtime");
+    nlohmann::json report;
+    report["log"] = log_path;
+    report["relations"] = relations_path;
+    report["log_duration_s"] = duration;
+    report["goals"] = {{"translation_m_below", kCartographerTranslation}, {"realtime_factor_at_least", kRealTimeGoal}};
+    for (const Result& r : results) {
+      const RelationMetric all = evaluateRelations(r.trajectory, relations);
+      const RelationMetric near = evaluateRelations(r.trajectory, local);
+      const double realtime = r.seconds > 0 ? duration / r.seconds : 0.0;
+      printRow(r.name.substr(0, 28), all, near, realtime);
+      nlohmann::json entry{{"name", r.name},
+                           {"seconds", r.seconds},
+                           {"realtime_factor", realtime},
+                           {"translation_m", statsJson(all.translation)},
+                           {"rotation_deg", statsJson(all.rotation_deg)},
+                           {"local_translation_m", statsJson(near.translation)},
+                           {"local_rotation_deg", statsJson(near.rotation_deg)},
+                           {"evaluated", all.evaluated},
+                           {"details", r.extra}};
+      report["estimators"].push_back(entry);
+      if (!out.empty()) {
+        std::filesystem::create_directories(out);
+        std::string file = r.name.substr(0, r.name.find(' ', 4));
+        for (char& c : file) c = c == ' ' ? '-' : static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        writeTumTrajectory((std::filesystem::path(out) / (file + ".tum")).string(), r.trajectory);
+      }
+    }
+    const Result& slam = results.back();
+    const RelationMetric slam_metric = evaluateRelations(slam.trajectory, relations);
+    const double slam_realtime = duration / slam.seconds;
+    std::printf("%-28s %7.4f ± %-7.4f %6.3f ± %-6.3f\n", "Cartographer (published)", kCartographerTranslation, 0.0363,
+                kCartographerRotation, 0.365);
+    std::printf("goal: translational error < %.4f m: %s (%.4f m); >= %.0fx real time on one core: %s (%.0fx)\n",
+                kCartographerTranslation, slam_metric.translation.mean < kCartographerTranslation ? "MET" : "NOT MET",
+                slam_metric.translation.mean, kRealTimeGoal, slam_realtime >= kRealTimeGoal ? "MET" : "NOT MET",
+                slam_realtime);
+    std::cout << "PSM SLAM details: " << slam.extra.dump() << "\n";
+    const RelationMetric online_metric = evaluateRelations(online, relations);
+    std::printf("PSM SLAM as published online (filter pose at each scan, before later corrections): %.4f ± %.4f m, "
+                "%.3f ± %.3f deg\n", online_metric.translation.mean, online_metric.translation.std,
+                online_metric.rotation_deg.mean, online_metric.rotation_deg.std);
+    report["psm_slam_online"] = {{"translation_m", statsJson(online_metric.translation)},
+                                 {"rotation_deg", statsJson(online_metric.rotation_deg)}};
+    if (!out.empty()) writeTumTrajectory((std::filesystem::path(out) / "psm-slam-online.tum").string(), online);
+    if (!out.empty()) {
+      std::ofstream((std::filesystem::path(out) / "bench.json").string()) << report.dump(2) << "\n";
+      std::cout << "wrote " << out << "/bench.json\n";
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "bench_psm_slam: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

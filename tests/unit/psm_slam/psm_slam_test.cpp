@@ -1,0 +1,214 @@
+// PSM SLAM end to end on simulated corridor loops with known truth: accuracy against the truth,
+// loop closure, the reference-scan policy, the stationary hold, and hostile input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+
+#include "slam/psm_slam.hpp"
+#include "synthetic_run.hpp"
+
+namespace polarslam {
+namespace {
+
+using testing::SyntheticRun;
+using testing::SyntheticRunOptions;
+
+PsmSlamParams testParams() {
+  PsmSlamParams p;
+  p.odometry.poses.k_distance = 4e-4;        // the simulated odometry's noise (synthetic_run.hpp)
+  p.odometry.poses.k_heading_per_rad = 1e-4;
+  p.odometry.poses.k_heading_per_m = 2e-4;   // covers the 0.01 rad/m heading bias
+  return p;
+}
+
+struct RunResult {
+  std::vector<PoseStamped> trajectory;
+  PsmSlamStats stats;
+  size_t loop_edges = 0;
+};
+
+RunResult runSlam(const SyntheticRun& run, const PsmSlamParams& params, bool optimise_at_end = true) {
+  PsmSlam slam(params);
+  for (size_t k = 0; k < run.scans.size(); ++k) {
+    slam.addOdometry(run.odometry[k]);
+    const PsmSlamScanResult r = slam.addScan(run.scans[k]);
+    EXPECT_TRUE(std::isfinite(r.pose.pose.x) && std::isfinite(r.pose.pose.theta));
+  }
+  if (optimise_at_end) slam.optimize();
+  return {slam.trajectory(), slam.stats(), slam.graph().countEdges(PoseGraphEdgeKind::Loop)};
+}
+
+double maxPositionError(const std::vector<PoseStamped>& estimate, const std::vector<Pose2>& truth) {
+  double worst = 0.0;
+  for (size_t i = 0; i < truth.size(); ++i)
+    worst = std::max(worst, (estimate[i].pose.translation() - truth[i].translation()).norm());
+  return worst;
+}
+
+double maxHeadingError(const std::vector<PoseStamped>& estimate, const std::vector<Pose2>& truth) {
+  double worst = 0.0;
+  for (size_t i = 0; i < truth.size(); ++i) worst = std::max(worst, std::abs(wrapAngle(estimate[i].pose.theta - truth[i].theta)));
+  return worst;
+}
+
+double deadReckoningEndError(const SyntheticRun& run) {
+  const Pose2 odometry = between(run.odometry.front().pose, run.odometry.back().pose);
+  return (odometry.translation() - run.truth.back().translation()).norm();
+}
+
+TEST(PsmSlam, LoopRunStaysCloseToTheTruthAndClosesTheLoop) {
+  const World world = testing::makeLoopWorld();
+  SyntheticRunOptions options;
+  options.laps = 2;
+  const SyntheticRun run = testing::simulateLoopRun(world, options);
+  ASSERT_GT(deadReckoningEndError(run), 0.5) << "the test needs odometry that drifts";
+  const RunResult result = runSlam(run, testParams());
+  ASSERT_EQ(result.trajectory.size(), run.truth.size());
+  EXPECT_LT(maxPositionError(result.trajectory, run.truth), 0.10);
+  EXPECT_LT(maxHeadingError(result.trajectory, run.truth), deg2rad(2.0));
+  EXPECT_GE(result.stats.loop_closures, 1u);
+  EXPECT_GE(result.loop_edges, 1u);
+  EXPECT_EQ(result.stats.unusable_scans, 0u);
+  EXPECT_GT(result.stats.tracked_scans, run.scans.size() / 2);
+}
+
+TEST(PsmSlam, ReferenceScansAreAddedAsTheRobotMovesAndReusedWhenItReturns) {
+  const World world = testing::makeLoopWorld();
+  SyntheticRunOptions options;
+  options.laps = 1;
+  const PsmSlamParams params = testParams();
+  const RunResult one = runSlam(testing::simulateLoopRun(world, options), params);
+  options.laps = 2;
+  const RunResult two = runSlam(testing::simulateLoopRun(world, options), params);
+  // One lap: 32 m of corridor and four 90° turns.
+  const double path = 32.0, turns = 4 * M_PI / 2;
+  const double expected = path / params.keyframe_distance + turns / params.keyframe_angle;
+  EXPECT_GT(static_cast<double>(one.stats.keyframes), 0.6 * expected);
+  EXPECT_LT(static_cast<double>(one.stats.keyframes), 1.6 * expected);
+  // The second lap takes up the first lap's reference scans again where they are still in the
+  // filter: the skeleton (one per skeleton_spacing of path, the others are marginalised and
+  // their scans dropped), so it adds fewer than the first lap did, and reuses about as many as
+  // the skeleton holds.
+  const double skeleton = path / params.skeleton_spacing;
+  EXPECT_LT(two.stats.keyframes - one.stats.keyframes, 0.8 * one.stats.keyframes);
+  EXPECT_GT(static_cast<double>(two.stats.reference_reuses), 0.6 * skeleton);
+}
+
+TEST(PsmSlam, StationaryRobotHoldsItsPose) {
+  const World world = testing::makeLoopWorld();
+  SyntheticRunOptions options;
+  options.stationary_scans_at_start = 40;
+  options.range_sigma = 0.02;  // noisy scans make PSM jitter
+  SyntheticRun run = testing::simulateLoopRun(world, options);
+  run.scans.resize(60);
+  run.odometry.resize(60);
+  run.truth.resize(60);
+  PsmSlam slam(testParams());
+  for (size_t k = 0; k < run.scans.size(); ++k) {
+    slam.addOdometry(run.odometry[k]);
+    slam.addScan(run.scans[k]);
+    if (k == 39) {
+      EXPECT_GE(slam.stats().held_scans, 35u);
+      EXPECT_EQ(slam.stats().keyframes, 1u);
+    }
+  }
+  const std::vector<PoseStamped> trajectory = slam.trajectory();
+  size_t moved = 0;
+  for (size_t k = 1; k < 40; ++k)
+    if ((trajectory[k].pose.translation() - trajectory[k - 1].pose.translation()).norm() > 1e-4) ++moved;
+  EXPECT_LE(moved, 4u);
+  EXPECT_LT(trajectory[39].pose.translation().norm(), 0.01);
+  // And it still follows the robot once it drives.
+  EXPECT_LT(maxPositionError(trajectory, run.truth), 0.05);
+}
+
+LaserScan baseScan(int64_t utime) {
+  LaserScan s;
+  s.utime = utime;
+  s.angle_min = -M_PI / 2;
+  s.angle_increment = M_PI / 180;
+  s.range_max = 8.0;
+  s.ranges.assign(181, 3.0f);
+  return s;
+}
+
+TEST(PsmSlam, HostileInputNeverCrashesAndPosesStayFinite) {
+  const World world = testing::makeLoopWorld();
+  SyntheticRunOptions options;
+  const SyntheticRun run = testing::simulateLoopRun(world, options);
+  PsmSlam slam(testParams());
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  size_t bad_scans = 0;
+  for (size_t k = 0; k < 80; ++k) {
+    slam.addOdometry(run.odometry[k]);
+    slam.addScan(run.scans[k]);
+    const int64_t t = run.scans[k].utime + 1000;
+    LaserScan s = baseScan(t);
+    switch (k % 10) {
+      case 0: s.ranges.clear(); break;
+      case 1: std::fill(s.ranges.begin(), s.ranges.end(), nan); break;
+      case 2: std::fill(s.ranges.begin(), s.ranges.end(), inf); break;
+      case 3: std::fill(s.ranges.begin(), s.ranges.end(), -1.0f); break;
+      case 4: s.angle_increment = 0.0; break;
+      case 5: s.angle_min = std::numeric_limits<double>::quiet_NaN(); break;
+      case 6: s.range_max = -1.0; break;
+      case 7: s.utime = 0; break;  // far back in time
+      case 8: s.ranges.assign(3, 1.0f); break;
+      case 9: for (size_t i = 0; i < s.ranges.size(); i += 2) s.ranges[i] = nan; break;
+    }
+    slam.addScan(s);
+    ++bad_scans;
+    OdometryReading odometry = run.odometry[k];
+    odometry.utime = t;
+    if (k % 3 == 0) odometry.pose.x = std::numeric_limits<double>::quiet_NaN();
+    if (k % 3 == 1) odometry.utime = 5;
+    slam.addOdometry(odometry);
+  }
+  slam.optimize();
+  const std::vector<PoseStamped> trajectory = slam.trajectory();
+  ASSERT_EQ(trajectory.size(), 80 + bad_scans);
+  for (const auto& p : trajectory) {
+    ASSERT_TRUE(std::isfinite(p.pose.x) && std::isfinite(p.pose.y) && std::isfinite(p.pose.theta));
+    ASSERT_TRUE(p.cov.allFinite());
+  }
+  EXPECT_GE(slam.stats().unusable_scans, 7u * bad_scans / 10 - 1);
+  EXPECT_GT(slam.stats().odometry_rejected, 0u);
+  // The good scans still track the truth.
+  std::vector<PoseStamped> good;
+  for (size_t k = 0; k < 80; ++k) good.push_back(trajectory[2 * k]);
+  EXPECT_LT(maxPositionError(good, std::vector<Pose2>(run.truth.begin(), run.truth.begin() + 80)), 0.1);
+}
+
+TEST(PsmSlam, ScansWithoutOdometryStillTrack) {
+  const World world = testing::makeLoopWorld();
+  SyntheticRunOptions options;
+  options.speed = 0.3;
+  const SyntheticRun run = testing::simulateLoopRun(world, options);
+  PsmSlam slam(testParams());
+  const size_t n = 120;
+  for (size_t k = 0; k < n; ++k) slam.addScan(run.scans[k]);
+  slam.optimize();
+  const std::vector<PoseStamped> trajectory = slam.trajectory();
+  EXPECT_LT(maxPositionError(trajectory, std::vector<Pose2>(run.truth.begin(), run.truth.begin() + n)), 0.15);
+}
+
+TEST(PsmSlam, ParametersLoadFromYamlAndTyposAreRejected) {
+  const std::string dir = ::testing::TempDir();
+  const std::string good = dir + "/psm_slam_good.yaml", bad = dir + "/psm_slam_bad.yaml";
+  {
+    std::ofstream(good) << "keyframe_distance: 0.8\nloop_search_radius: 3.5\npsm:\n  max_range: 12\n  covariance: heuristic\n";
+    std::ofstream(bad) << "keyframe_distanse: 0.8\n";
+  }
+  const PsmSlamParams p = loadPsmSlamParams(good);
+  EXPECT_DOUBLE_EQ(p.keyframe_distance, 0.8);
+  EXPECT_DOUBLE_EQ(p.loop_search_radius, 3.5);
+  EXPECT_DOUBLE_EQ(p.psm.max_range, 12.0);
+  EXPECT_EQ(p.psm.covariance, CovarianceModel::Heuristic);
+  EXPECT_THROW(loadPsmSlamParams(bad), std::runtime_error);
+  EXPECT_THROW(loadPsmSlamParams(dir + "/does_not_exist.yaml"), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace polarslam
