@@ -34,7 +34,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 struct Options {
-  std::string world = std::string(POLARSLAM_SOURCE_DIR) + "/config/worlds/office.yaml";
+  std::vector<std::string> worlds = {std::string(POLARSLAM_SOURCE_DIR) + "/config/worlds/office.yaml",
+                                     std::string(POLARSLAM_SOURCE_DIR) + "/config/worlds/glass-partition-loop.yaml"};
   std::string robot = std::string(POLARSLAM_SOURCE_DIR) + "/config/robots/default.yaml";
   int seeds = 20;
   uint64_t first_seed = 1;
@@ -145,13 +146,13 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-void runClaim(const Options& o) {
-  const World world = loadWorld(o.world);
+void runClaim(const Options& o, const std::string& world_path) {
+  const World world = loadWorld(world_path);
   const SimConfig robot = loadSimConfig(o.robot);
   const std::vector<SlamSensors> configs = {SlamSensors::Laser, SlamSensors::Sonar, SlamSensors::Fused};
   std::map<SlamSensors, Row> rows;
   int fused_wins = 0;
-  std::printf("world %s, robot %s, %d seeds from %llu\n", o.world.c_str(), o.robot.c_str(), o.seeds,
+  std::printf("\n=== world %s, robot %s, %d seeds from %llu\n", world_path.c_str(), o.robot.c_str(), o.seeds,
               static_cast<unsigned long long>(o.first_seed));
   std::printf("%6s %8s | %-28s | %-28s | %-28s\n", "seed", "seconds", "laser: ATE max map loop", "sonar: ATE max map loop",
               "fused: ATE max map loop");
@@ -172,7 +173,7 @@ void runClaim(const Options& o) {
       nlohmann::json report;
       std::string dir;
       if (!o.out.empty() && k == 0) {
-        dir = (std::filesystem::path(o.out) / toString(t.sensors)).string();
+        dir = (std::filesystem::path(o.out) / world.name / toString(t.sensors)).string();
         std::filesystem::create_directories(dir);
       }
       t.estimator->finish(dir, report);
@@ -181,7 +182,7 @@ void runClaim(const Options& o) {
       const RunResult r = evaluate(*t.estimator, truth, sim.time(), t.seconds, o);
       rows[t.sensors].runs.push_back(r);
       if (!o.nees_trace.empty() && k == 0) {
-        std::ofstream trace(o.nees_trace + "." + toString(t.sensors) + ".csv");
+        std::ofstream trace(o.nees_trace + "." + world.name + "." + toString(t.sensors) + ".csv");
         trace << "second,nees,forward_error,left_error,heading_error,forward_std,left_std,heading_std\n";
         for (size_t i = 0; i < r.nees.size(); ++i) trace << i + 1 << "," << r.nees[i] << "," << r.trace[i] << "\n";
       }
@@ -295,7 +296,7 @@ int main(int argc, char** argv) {
   CLI::App app{"bench_slam: laser-only, sonar-only and fused EKF SLAM; consistency; speed"};
   Options o;
   bool speed_only = false, no_speed = false;
-  app.add_option("--world", o.world)->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--world", o.worlds, "world files, each run in turn")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--robot", o.robot)->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--seeds", o.seeds)->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--first-seed", o.first_seed)->capture_default_str();
@@ -307,7 +308,8 @@ int main(int argc, char** argv) {
   app.add_flag("--no-speed", no_speed, "skip the update timing");
   CLI11_PARSE(app, argc, argv);
   try {
-    if (!speed_only) runClaim(o);
+    if (!speed_only)
+      for (const std::string& world : o.worlds) runClaim(o, world);
     if (!no_speed) {
       std::printf("\ntime per EKF update (association over all features + batch update of 12 point observations)\n");
       std::printf("%8s %10s %14s %14s\n", "features", "state dim", "ms / update", "paired/update");
