@@ -104,7 +104,7 @@ class GroupFileParser {
     const std::string what = "command in " + group_path;
     f_.requireMap(node, what,
                   {"name", "exec", "command", "args", "environment", "working_dir", "host", "auto_respawn",
-                   "stop_signal", "stop_grace", "respawn_backoff", "start_order", "start_delay"});
+                   "stop_signal", "stop_grace", "respawn_backoff", "start_order", "start_delay", "required"});
     CommandSpec cmd;
     cmd.name = name(node, what);
     if (cmd.name == "launch" || cmd.name == "launcher")
@@ -123,6 +123,7 @@ class GroupFileParser {
     cmd.backoff = d.backoff;
     cmd.start_order = f_.integer(node, "start_order", ctx, 0, -1000, 1000);
     cmd.start_delay_s = f_.number(node, "start_delay", ctx, 0.0, 0.0, 3600.0);
+    cmd.required = f_.boolean(node, "required", ctx, false);
     cmd.argv = argv(node, ctx, varsWith(cmd.environment));
     return cmd;
   }

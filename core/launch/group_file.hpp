@@ -35,6 +35,7 @@ struct CommandSpec {
   double stop_grace_s = 3.0;        // time between stop_signal and SIGKILL
   int start_order = 0;              // lower starts first; ties keep file order
   double start_delay_s = 0.0;       // wait after the previous command's start
+  bool required = false;            // when it ends for good, everything stops (e.g. a log player)
   RestartBackoff backoff;
   std::string where;                // "FILE:LINE" of its definition
 };

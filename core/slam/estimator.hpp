@@ -21,6 +21,8 @@ class Estimator {
   virtual void onOdometry(const OdometryReading&) {}
   virtual void onLaser(const LaserScan&) {}
   virtual void onSonar(const SonarScan&) {}
+  /// A pose estimated elsewhere, e.g. recorded from a live run (see RecordedEstimator).
+  virtual void onPose(const PoseStamped&) {}
   /// Robot base pose estimates in the map frame (= the robot's starting frame), in time order.
   virtual const std::vector<PoseStamped>& trajectory() const = 0;
   /// Called once after the last message: write maps into `out_dir`, add figures to `report`.
@@ -38,6 +40,21 @@ class OdometryEstimator : public Estimator {
   bool started_ = false;
   Pose2 origin_inverse_;
   std::vector<PoseStamped> trajectory_;
+};
+
+/// The poses another estimator published (a live run's SLAM_POSE recorded with lcm-logger), in
+/// time order: evaluates a live run with the same figures and plots as an offline one. Poses
+/// older than the last one are dropped and counted (a logger can record out of order).
+class RecordedEstimator : public Estimator {
+ public:
+  std::string name() const override { return "recorded"; }
+  void onPose(const PoseStamped& pose) override;
+  const std::vector<PoseStamped>& trajectory() const override { return trajectory_; }
+  void finish(const std::string& out_dir, nlohmann::json& report) override;
+
+ private:
+  std::vector<PoseStamped> trajectory_;
+  long out_of_order_ = 0;
 };
 
 }  // namespace polarslam

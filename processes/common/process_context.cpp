@@ -109,6 +109,7 @@ void ProcessContext::run(std::function<bool()> done, std::function<void()> tick,
   auto next_status = std::chrono::steady_clock::now() + std::chrono::seconds(1);
   while (!g_stop && !(done && done())) {
     if (lcm_->handleTimeout(50) < 0) {
+      if (g_stop) break;  // the stop signal interrupted the wait
       std::cerr << "[" << name_ << "] LCM receive error\n";
       break;
     }

@@ -72,7 +72,7 @@ int Supervisor::run() {
   readOutput(true);
   publishAll();
   logs_.flush();
-  return table_.anyFailed() ? 1 : 0;
+  return table_.anyFailed() || required_failed_ ? 1 : 0;
 }
 
 bool Supervisor::finished() const { return !table_.anyActive() && ending_.empty(); }
@@ -195,6 +195,11 @@ void Supervisor::onExit(size_t i, ExitStatus status, LaunchClock::time_point now
   event(what);
   logs_.write(r.spec.name, "[launch] " + what);
   publish(i);
+  if (r.spec.required && next != RunState::Restarting && !shutting_down_) {
+    event(r.spec.name + " is required: stopping everything");
+    required_failed_ = !status.clean();
+    beginShutdown(now);
+  }
 }
 
 void Supervisor::beginShutdown(LaunchClock::time_point now) {

@@ -74,6 +74,7 @@ class Supervisor {
   std::map<size_t, UsageSample> usage_;
   LaunchClock::time_point next_status_;
   bool shutting_down_ = false;
+  bool required_failed_ = false;  // a required command ended with a failure
   LaunchClock::time_point shutdown_began_{};
 };
 

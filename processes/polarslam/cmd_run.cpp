@@ -72,6 +72,9 @@ void runPipeline(const RunOptions& o) {
   const auto& factories = pipelines();
   const auto factory = factories.find(o.pipeline);
   if (factory == factories.end()) throw std::runtime_error("unknown pipeline '" + o.pipeline + "'");
+  if ((o.pipeline == "recorded") != !o.channels.estimated_pose.empty())
+    throw std::runtime_error("--pose-channel goes with --pipeline recorded, and only with it");
+  const std::string label = o.pipeline == "recorded" ? o.channels.estimated_pose + " (recorded)" : o.pipeline;
   std::filesystem::create_directories(o.out);
   std::unique_ptr<Estimator> estimator = factory->second(o.pipeline_options);
   OdometryEstimator dead_reckoning;
@@ -86,6 +89,7 @@ void runPipeline(const RunOptions& o) {
     dead_reckoning.onOdometry(r);
   };
   visitor.ground_truth = [&](const PoseStamped& p) { truth.push_back(p); };
+  visitor.estimated_pose = [&](const PoseStamped& p) { estimator->onPose(p); };
   const SensorLogSummary summary = visitSensorLog(o.log, o.channels, visitor, "run " + o.pipeline);
   nlohmann::json report;
   estimator->finish(o.out, report);
@@ -94,7 +98,7 @@ void runPipeline(const RunOptions& o) {
   const auto& estimate = estimator->trajectory();
   truth = inStartFrame(std::move(truth));
   writeTumTrajectory((std::filesystem::path(o.out) / "trajectory.tum").string(), estimate);
-  report["pipeline"] = o.pipeline;
+  report["pipeline"] = label;
   report["sensors"] = o.pipeline_options.sensors;
   report["log"] = o.log;
   report["log_duration_s"] = summary.durationSeconds();
@@ -110,7 +114,7 @@ void runPipeline(const RunOptions& o) {
     report["max_error_m"] = ate.raw_translation.max;
   }
   const std::filesystem::path dir(o.out);
-  plotTrajectories((dir / "trajectory.png").string(), o.pipeline + " trajectory", estimate, truth,
+  plotTrajectories((dir / "trajectory.png").string(), label + " trajectory", estimate, truth,
                    o.pipeline == "odometry" ? std::vector<PoseStamped>{} : dead_reckoning.trajectory());
   plotErrorOverTime((dir / "error.png").string(), estimate, truth);
   writeFileAtomically((dir / "report.json").string(), report.dump(2) + "\n");
@@ -134,6 +138,8 @@ void setupRun(CLI::App& sub) {
   sub.add_option("--sonar-channel", o->channels.sonar)->capture_default_str();
   sub.add_option("--odometry-channel", o->channels.odometry)->capture_default_str();
   sub.add_option("--ground-truth-channel", o->channels.ground_truth)->capture_default_str();
+  sub.add_option("--pose-channel", o->channels.estimated_pose,
+                 "with --pipeline recorded: the pose_t channel a live run published (e.g. SLAM_POSE)");
   sub.callback([o] { runPipeline(*o); });
 }
 

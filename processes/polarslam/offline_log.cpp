@@ -48,6 +48,7 @@ SensorLogSummary visitSensorLog(const std::string& path, const SensorChannelName
     else if (event.channel == channels.sonar) dispatch.deliver<sonar_targets_t>(event, visitor.sonar);
     else if (event.channel == channels.odometry) dispatch.deliver<odometry_t>(event, visitor.odometry);
     else if (event.channel == channels.ground_truth) dispatch.deliver<pose_t>(event, visitor.ground_truth);
+    else if (event.channel == channels.estimated_pose) dispatch.deliver<pose_t>(event, visitor.estimated_pose);
     if (++events % 256 == 0) progress.update(reader.progress());
   }
   progress.finish();

@@ -14,6 +14,7 @@ namespace polarslam {
 
 struct SensorChannelNames {
   std::string laser = "LASER", sonar = "SONAR", odometry = "ODOMETRY", ground_truth = "GROUND_TRUTH";
+  std::string estimated_pose;  ///< pose_t estimates to read as well (empty: none)
 };
 
 struct SensorLogVisitor {
@@ -21,6 +22,7 @@ struct SensorLogVisitor {
   std::function<void(const SonarScan&)> sonar;
   std::function<void(const OdometryReading&)> odometry;
   std::function<void(const PoseStamped&)> ground_truth;
+  std::function<void(const PoseStamped&)> estimated_pose;
 };
 
 struct SensorLogSummary {

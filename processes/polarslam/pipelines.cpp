@@ -8,6 +8,7 @@ namespace polarslam {
 const std::map<std::string, PipelineFactory>& pipelines() {
   static const std::map<std::string, PipelineFactory> factories = {
       {"odometry", [](const PipelineOptions&) { return std::make_unique<OdometryEstimator>(); }},
+      {"recorded", [](const PipelineOptions&) { return std::make_unique<RecordedEstimator>(); }},
       {"ekf",
        [](const PipelineOptions& o) -> std::unique_ptr<Estimator> {
          const SlamSensors sensors = parseSlamSensors(o.sensors);

@@ -308,6 +308,30 @@ commands:
   EXPECT_EQ(launcher.process().exitCode(), 1) << "a command failed to start\n" << out;
 }
 
+TEST(Launcher, RequiredCommandEndingStopsEverythingWithItsVerdict) {
+  // The shape of config/groups/replay.yaml: a long-running stage and a required player.
+  for (const auto& [finisher, expected_exit] : {std::pair{"sleep 0.3", 0}, std::pair{"sleep 0.3; exit 3", 1}}) {
+    const auto dir = launcherScratch(std::string("required-") + std::to_string(expected_exit));
+    const std::string groups = writeFile(dir / "required.yaml", std::string(R"(name: required-test
+stop_grace: 1
+commands:
+  - name: stage
+    exec: sleep
+    args: ["1000"]
+  - name: player
+    command: ")") + finisher + R"("
+    required: true
+    auto_respawn: false
+)");
+    Launcher launcher(dir, groups);
+    ASSERT_TRUE(launcher.process().waitFor(15s)) << "the launcher did not stop by itself\n" << launcher.output();
+    const std::string out = launcher.output();
+    EXPECT_EQ(launcher.process().exitCode(), expected_exit) << out;
+    EXPECT_NE(out.find("[launch] player is required: stopping everything"), std::string::npos) << out;
+    EXPECT_NE(out.find("[launch] stage ended: killed by SIGTERM"), std::string::npos) << out;
+  }
+}
+
 TEST(Launcher, BadGroupFileGivesOneErrorNamingFileAndLine) {
   const auto dir = launcherScratch("bad");
   const std::string groups = writeFile(dir / "bad.yaml", "name: bad\ncommands:\n  - name: a\n    exce: sleep\n");

@@ -59,6 +59,7 @@ groups:
         command: "echo ${WORLD} && sleep 1"
         stop_signal: KILL
         start_order: -1
+        required: true
 commands:
   - name: sim
     exec: ./bin/polarslam-sim
@@ -82,9 +83,10 @@ TEST_F(GroupFileTest, NestedGroupsInheritDefaultsAndExpandVariables) {
   EXPECT_DOUBLE_EQ(sim.stop_grace_s, 2.0);
   EXPECT_DOUBLE_EQ(sim.start_delay_s, 1.5);
   EXPECT_TRUE(sim.auto_respawn);
+  EXPECT_FALSE(sim.required);
   EXPECT_EQ(sim.environment.at("LEVEL"), "/home/r/x");
   EXPECT_EQ(sim.environment.at("GROUP_DIR"), group_dir);
-  EXPECT_EQ(sim.where, (dir_ / "stack.yaml").string() + ":21");
+  EXPECT_EQ(sim.where, (dir_ / "stack.yaml").string() + ":22");
 
   const CommandSpec& ekf = root.groups[0].commands[0];
   EXPECT_EQ(ekf.host, "base");
@@ -102,6 +104,7 @@ TEST_F(GroupFileTest, NestedGroupsInheritDefaultsAndExpandVariables) {
   // Shell lines are left to the shell, which sees the same variables in its environment.
   EXPECT_EQ(shell.argv, (std::vector<std::string>{"/bin/sh", "-c", "echo ${WORLD} && sleep 1"}));
   EXPECT_EQ(shell.stop_signal, SIGKILL);
+  EXPECT_TRUE(shell.required);
 }
 
 TEST_F(GroupFileTest, FileStemNamesAnUnnamedTopGroup) {
@@ -143,7 +146,8 @@ TEST_F(GroupFileTest, ErrorsNameFileAndLine) {
             f + ":4: YAML syntax error: end of sequence flow not found");
   EXPECT_EQ(loadError("commands:\n  - name: a\n    exec: sleep\n    respawn: yes\n"),
             f + ":4: unknown key 'respawn' in command in bad (allowed: name, exec, command, args, environment, "
-                "working_dir, host, auto_respawn, stop_signal, stop_grace, respawn_backoff, start_order, start_delay)");
+                "working_dir, host, auto_respawn, stop_signal, stop_grace, respawn_backoff, start_order, start_delay, "
+                "required)");
   EXPECT_EQ(loadError("commands:\n  - name: a\n    exec: sleep\n    command: sleep 1\n"),
             f + ":4: bad/a: give either 'exec' (a program) or 'command' (a shell line), not both");
   EXPECT_EQ(loadError("commands:\n  - name: a\n    args: [1]\n"),
