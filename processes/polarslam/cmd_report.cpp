@@ -102,7 +102,10 @@ void writeReport(const std::string& root_dir, const std::string& title) {
        << "<h1>" << escapeHtml(title) << "</h1>\n";
   summaryTable(runs, html);
   for (size_t i = 0; i < dirs.size(); ++i) runSection(dirs[i], root, runs[i].second, html);
-  html << "</body></html>\n";
+  // Marks the page once every image has loaded (or failed): tests read it with headless Chromium.
+  html << "<script>window.addEventListener('load',()=>{const all=[...document.images];"
+       << "document.body.dataset.imagesLoaded=all.filter(i=>i.complete&&i.naturalWidth>0).length+'/'+all.length;});"
+       << "</script>\n</body></html>\n";
   writeFileAtomically((root / "report.html").string(), html.str());
   std::cout << "wrote " << (root / "report.html").string() << "\n";
 }
