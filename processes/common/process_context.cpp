@@ -101,9 +101,31 @@ void ProcessContext::installSignalHandlers() {
 
 bool ProcessContext::stopRequested() { return g_stop.load(); }
 
+void ProcessContext::enableJournal(const JournalOptions& options) {
+  if (options.path.empty()) return;
+  journal_ = std::make_unique<InputJournal>(
+      options.path, std::chrono::milliseconds(static_cast<int64_t>(options.flush_period * 1000.0)));
+}
+
+void ProcessContext::resumeFromJournal() {
+  const std::vector<LogEvent> events = journal_->recover();
+  if (events.empty()) return;
+  replaying_ = true;
+  for (const LogEvent& event : events) {
+    lcm::ReceiveBuffer buffer{const_cast<uint8_t*>(event.data.data()), static_cast<uint32_t>(event.data.size()),
+                              event.utime};
+    for (const auto& sub : subscriptions_)
+      if (sub->channel == event.channel) sub->raw(&buffer);
+  }
+  replaying_ = false;
+  std::cerr << "[" << name_ << "] resumed from journal " << journal_->path() << ": " << events.size()
+            << " messages replayed\n";
+}
+
 void ProcessContext::run(std::function<bool()> done, std::function<void()> tick,
                          std::chrono::milliseconds tick_period) {
   installSignalHandlers();
+  if (journal_) resumeFromJournal();
   publishStatus("running");
   auto next_tick = std::chrono::steady_clock::now() + tick_period;
   auto next_status = std::chrono::steady_clock::now() + std::chrono::seconds(1);
@@ -113,6 +135,7 @@ void ProcessContext::run(std::function<bool()> done, std::function<void()> tick,
       std::cerr << "[" << name_ << "] LCM receive error\n";
       break;
     }
+    if (journal_) journal_->flushIfDue();
     const auto now = std::chrono::steady_clock::now();
     if (tick && now >= next_tick) {
       tick();

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "common/input_journal.hpp"
 #include "common/lcm_decode.hpp"
 
 namespace polarslam {
@@ -45,6 +46,7 @@ class ProcessContext {
     auto sub = std::make_unique<Subscription>();
     sub->context = this;
     sub->raw = [this, handler, channel](const lcm::ReceiveBuffer* rbuf) {
+      if (journal_ && !replaying_) journal_->append(channel, rbuf->recv_utime, rbuf->data, rbuf->data_size);
       MsgT msg;
       if (!decodeLcm(msg, rbuf->data, rbuf->data_size)) {
         reject(channel + ": message does not decode as " + MsgT::getTypeName());
@@ -54,11 +56,18 @@ class ProcessContext {
     };
     lcm::Subscription* s = lcm_->subscribe(channel, &Subscription::onMessage, sub.get());
     s->setQueueCapacity(1000);
+    sub->channel = channel;
     subscriptions_.push_back(std::move(sub));
   }
 
+  /// Nothing is published while the journal is replayed: those messages went out before.
   template <typename MsgT>
-  void publish(const std::string& channel, const MsgT& msg) { lcm_->publish(channel, &msg); }
+  void publish(const std::string& channel, const MsgT& msg) {
+    if (!replaying_) lcm_->publish(channel, &msg);
+  }
+
+  /// Crash recovery (input_journal.hpp): run() first replays the journal, then appends to it.
+  void enableJournal(const JournalOptions& options);
 
   void handled() { ++handled_; }
   /// Counts a rejected message; the first of each kind is logged to stderr.
@@ -78,8 +87,11 @@ class ProcessContext {
   static void installSignalHandlers();
 
  private:
+  void resumeFromJournal();
+
   struct Subscription {
     ProcessContext* context = nullptr;
+    std::string channel;
     std::function<void(const lcm::ReceiveBuffer*)> raw;
     void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string&) { raw(rbuf); }
   };
@@ -90,6 +102,8 @@ class ProcessContext {
   int64_t handled_ = 0, rejected_ = 0;
   std::map<std::string, int64_t> reject_kinds_;
   SequenceTracker sequences_;
+  std::unique_ptr<InputJournal> journal_;
+  bool replaying_ = false;
 };
 
 /// Resolves the LCM URL: explicit option, then LCM_DEFAULT_URL, then multicast with TTL 0.

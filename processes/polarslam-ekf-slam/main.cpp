@@ -30,12 +30,15 @@ int main(int argc, char** argv) {
   app.add_option("--anchors-channel", anchors_channel)->capture_default_str();
   app.add_option("--map-period", map_period, "s between SLAM_MAP messages (stream time)")->check(CLI::PositiveNumber)
       ->capture_default_str();
+  JournalOptions journal;
+  addJournalOptions(app, journal);
   CLI11_PARSE(app, argc, argv);
 
   try {
     const FeatureSlamConfig cfg =
         config.empty() ? configForRobot(SimConfig{}, SlamSensors::Fused) : loadFeatureSlamConfig(config, SlamSensors::Fused);
     ProcessContext context("polarslam-ekf-slam", url);
+    context.enableJournal(journal);
     FeatureSlam slam(cfg.slam);
     int64_t pose_seq = 0, map_seq = 0, anchor_seq = 0, last_map_utime = 0;
     const int64_t map_period_us = static_cast<int64_t>(map_period * 1e6);

@@ -308,11 +308,14 @@ int main(int argc, char** argv) {
   app.add_option("--grid-path-channel", c.grid_path)->capture_default_str();
   app.add_option("--planned-path-channel", c.planned_path)->capture_default_str();
   app.add_option("--status-channel", c.status)->capture_default_str();
+  JournalOptions journal;
+  addJournalOptions(app, journal);
   CLI11_PARSE(app, argc, argv);
   o.planner.comfort_distance = std::max(o.planner.comfort_distance, 2.0 * o.planner.robot_radius);
 
   try {
     ProcessContext context("polarslam-grid", url);
+    context.enableJournal(journal);
     GridNode node(context, o);
     node.subscribe();
     context.run({}, [&] { node.tick(); }, std::chrono::milliseconds(100));

@@ -62,11 +62,14 @@ int main(int argc, char** argv) {
   app.add_option("--odometry-channel", channels.odometry)->capture_default_str();
   app.add_option("--pose-channel", channels.pose)->capture_default_str();
   app.add_option("--graph-channel", channels.graph)->capture_default_str();
+  JournalOptions journal;
+  addJournalOptions(app, journal);
   CLI11_PARSE(app, argc, argv);
 
   try {
     PsmSlam slam(config.empty() ? PsmSlamParams{} : loadPsmSlamParams(config));
     ProcessContext context("polarslam-psm-slam", url);
+    context.enableJournal(journal);
     GraphPublisher graph(context, channels.graph, graph_period);
     int64_t pose_seq = 0, last_utime = 0;
     context.subscribe<polarslam::laser_scan_t>(channels.laser, [&](const polarslam::laser_scan_t& msg) {

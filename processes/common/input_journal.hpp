@@ -1,0 +1,51 @@
+#pragma once
+// Crash recovery for the stateful processes (the SLAM estimators, the grid): every input message
+// is appended to a journal, an ordinary LCM log, flushed to disk every flush period. A process
+// restarted after a crash (kill -9, a bug) replays the journal through its own handlers before it
+// listens again, so it resumes with the state it had — the same state, because the core is
+// deterministic — and a final map still covers the whole run. Messages that arrived while it
+// was down are the only loss.
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/lcm_log.hpp"
+
+namespace polarslam {
+
+class InputJournal {
+ public:
+  InputJournal(std::string path, std::chrono::milliseconds flush_period);
+  InputJournal(const InputJournal&) = delete;
+  InputJournal& operator=(const InputJournal&) = delete;
+
+  /// The journal's intact events (a last event torn by a crash is dropped). Rewrites the file
+  /// with exactly those (temp file + rename, so a crash now loses nothing) and keeps it open for
+  /// appending. Call once, before append().
+  std::vector<LogEvent> recover();
+  void append(const std::string& channel, int64_t utime, const void* data, size_t size);
+  /// Flushes to the kernel when the flush period has passed since the last flush.
+  void flushIfDue();
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::chrono::milliseconds flush_period_;
+  std::unique_ptr<lcm::LogFile> log_;
+  std::chrono::steady_clock::time_point last_flush_;
+};
+
+struct JournalOptions {
+  std::string path;         ///< empty: no journal
+  double flush_period = 1.0;  ///< s
+};
+
+/// --journal FILE and --journal-flush S, the same on every process that keeps state.
+void addJournalOptions(CLI::App& app, JournalOptions& options);
+
+}  // namespace polarslam

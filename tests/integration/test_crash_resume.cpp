@@ -1,0 +1,141 @@
+// Crash without loss: kill -9 the EKF SLAM process in the middle of a live run; the launcher
+// restarts it, it replays its input journal (processes/common/input_journal.hpp) and resumes,
+// so its poses stay in the same map frame and its final map covers the whole run — compared
+// with the same run uninterrupted.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "child_process.hpp"
+#include "common/lcm_log.hpp"
+#include "common/process_context.hpp"
+#include "polarslam/process_status_t.hpp"
+#include "polarslam/slam_map_t.hpp"
+
+using namespace std::chrono_literals;
+using polarslam::testing::binPath;
+using polarslam::testing::ChildProcess;
+using polarslam::testing::sourcePath;
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string readFile(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string groupFile(const fs::path& dir) {
+  const std::string robot = sourcePath("config/robots/default.yaml");
+  const std::string world = sourcePath("config/worlds/office.yaml");
+  const fs::path path = dir / "resume.yaml";
+  std::ofstream(path) << R"(name: resume-test
+stop_signal: SIGINT
+stop_grace: 5
+commands:
+  - name: recorder
+    command: 'exec lcm-logger --quiet --force "$POLARSLAM_RUN_DIR/recorded.lcmlog"'
+    start_order: -10
+  - name: features
+    exec: polarslam-features
+  - name: fusion
+    exec: polarslam-fusion
+    args: [--config, ")" << robot << R"("]
+  - name: ekf-slam
+    command: 'exec polarslam-ekf-slam --config ")" << robot << R"(" --journal "$POLARSLAM_RUN_DIR/ekf-slam.journal" --journal-flush 0.2'
+  - name: sim
+    command: 'polarslam-sim --world ")" << world << R"(" --robot ")" << robot << R"(" --speed 3 --seconds 45 && sleep 2'
+    required: true
+    auto_respawn: false
+    start_order: 10
+    start_delay: 1.5
+)";
+  return path.string();
+}
+
+struct RunFigures {
+  double ate_rmse = 0.0;
+  long map_features = 0;
+};
+
+RunFigures figuresOf(const fs::path& run_dir) {
+  RunFigures f;
+  polarslam::LcmLogReader reader((run_dir / "recorded.lcmlog").string());
+  polarslam::LogEvent event;
+  polarslam::slam_map_t map;
+  while (reader.next(event))
+    if (event.channel == "SLAM_MAP" && event.decode(map)) f.map_features = map.num_features;
+  const fs::path eval = run_dir / "eval";
+  ChildProcess run({binPath("polarslam"), "run", "--log", (run_dir / "recorded.lcmlog").string(), "--pipeline", "recorded",
+                    "--pose-channel", "SLAM_POSE", "--out", eval.string()},
+                   (run_dir / "eval.out").string());
+  EXPECT_TRUE(run.waitFor(60s));
+  std::ifstream in(eval / "report.json");
+  const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
+  f.ate_rmse = report.value("ate_rmse_m", 1e9);
+  return f;
+}
+
+/// Runs the group to its end; with `kill_after`, kills ekf-slam with SIGKILL that long after it started.
+void runGroup(const fs::path& dir, std::optional<std::chrono::seconds> kill_after) {
+  fs::create_directories(dir);
+  lcm::LCM lcm(polarslam::resolveLcmUrl(""));
+  ASSERT_TRUE(lcm.good()) << "LCM UDP multicast unavailable: run the tests through scripts/with-netns";
+  std::vector<polarslam::process_status_t> statuses;
+  struct Sink {
+    std::vector<polarslam::process_status_t>* out;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const polarslam::process_status_t* m) { out->push_back(*m); }
+  } sink{&statuses};
+  lcm.subscribe("PROCESS_STATUS", &Sink::on, &sink);
+  ChildProcess launcher({binPath("polarslam-launch"), groupFile(dir), "--no-tui", "--run-dir", (dir / "run").string()},
+                        (dir / "launch.out").string());
+  auto ekfPid = [&](int other_than) {
+    for (const auto& s : statuses)
+      if (s.name == "ekf-slam" && s.state == "running" && s.pid > 0 && s.pid != other_than) return s.pid;
+    return 0;
+  };
+  const auto start = std::chrono::steady_clock::now();
+  int killed = 0;
+  while (launcher.running() && std::chrono::steady_clock::now() - start < 120s) {
+    lcm.handleTimeout(50);
+    if (kill_after && !killed && std::chrono::steady_clock::now() - start > *kill_after && ekfPid(0)) {
+      killed = ekfPid(0);
+      ASSERT_EQ(kill(killed, SIGKILL), 0);
+    }
+  }
+  ASSERT_TRUE(launcher.waitFor(30s)) << readFile(dir / "launch.out");
+  EXPECT_EQ(launcher.exitCode(), 0) << readFile(dir / "launch.out");
+  if (kill_after) {
+    ASSERT_NE(killed, 0) << "ekf-slam was never seen running";
+    EXPECT_NE(ekfPid(killed), 0) << "ekf-slam did not come back\n" << readFile(dir / "launch.out");
+    EXPECT_NE(readFile(dir / "run" / "ekf-slam.log").find("resumed from journal"), std::string::npos)
+        << readFile(dir / "run" / "ekf-slam.log");
+  }
+}
+
+}  // namespace
+
+TEST(CrashResume, KilledEkfSlamResumesFromItsJournalAndTheMapCoversTheWholeRun) {
+  const fs::path dir = fs::temp_directory_path() / ("polarslam-resume-it-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  runGroup(dir / "uninterrupted", std::nullopt);
+  runGroup(dir / "killed", 8s);  // 8 s at 3x: about 20 s into the 45 s drive
+  if (HasFatalFailure()) return;
+  const RunFigures whole = figuresOf(dir / "uninterrupted" / "run");
+  const RunFigures resumed = figuresOf(dir / "killed" / "run");
+  ASSERT_GT(whole.map_features, 10);
+  EXPECT_LT(whole.ate_rmse, 0.1);
+  // Without the journal the restarted filter would start a new map at the robot's pose then:
+  // metres of error and only the second half of the features.
+  EXPECT_LT(resumed.ate_rmse, whole.ate_rmse + 0.05);
+  EXPECT_GE(resumed.map_features, whole.map_features * 9 / 10);
+  if (!HasFailure()) fs::remove_all(dir);
+}
