@@ -139,6 +139,11 @@ class PsmSlam {
   /// Matches the scan against the active reference from the odometry prior, and from the
   /// previous motion when the two disagree (stale odometry); the better match wins.
   std::optional<Observation> trackReference(const PreparedScan& scan, const Pose2& mount);
+  /// Updates the filter with a good tracking match; when it fails the χ² gate but the miss is a
+  /// plausible odometry fault, the prior is inflated by the miss and the match applied.
+  bool applyTrackingMatch(const Observation& o);
+  bool plausibleOdometryFault(const RelativePosePrediction& prior, const Observation& o) const;
+  void inflatePriorForMiss(const RelativePosePrediction& prior, const Observation& o);
   bool goodMatch(const Observation& o, bool loop_candidate) const;
   bool robotStill(const Observation& tracked) const;
   bool needsNewReference(const std::optional<Observation>& tracked);
@@ -153,7 +158,7 @@ class PsmSlam {
   bool selectReference(const LaserScan& scan, PreparedScan& prepared, const std::optional<Observation>& tracked);
   void reuseReference(const Observation& chosen, const std::vector<Observation>& accepted);
   void addKeyframe(const LaserScan& scan, PreparedScan prepared, const std::vector<Observation>& accepted,
-                   const std::optional<RelativePosePrediction>& odometry_link, int64_t previous);
+                   const std::optional<RelativePosePrediction>& link, int64_t previous);
   void addGraphEdge(int64_t from, int64_t to, const Pose2& z, const Mat3& R, PoseGraphEdgeKind kind);
   void marginaliseOldKeyframes();
   void marginaliseKeyframe(int64_t id);

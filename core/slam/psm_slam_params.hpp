@@ -41,6 +41,10 @@ struct PsmSlamParams {
   /// Associated bearings over the smaller of the two scans' usable readings.
   double min_overlap = 0.35;
   double chi2_gate = 16.27;              ///< χ²₃(0.999) on the innovation of a tracking match
+  /// A good tracking match outside the gate is taken as an odometry fault (the prior is inflated
+  /// by the miss) when it is within these of the prediction; a larger miss rejects the match.
+  double max_odometry_fault_translation = 0.3;  ///< m
+  double max_odometry_fault_rotation = deg2rad(30.0);
 
   // --- reference scans (keyframes) ---
   double keyframe_distance = 0.6;        ///< m from the active reference scan
