@@ -45,7 +45,8 @@ struct PsmSlamParams {
   double min_overlap = 0.35;
   double chi2_gate = 16.27;              ///< χ²₃(0.999) on the innovation of a tracking match
   /// A good tracking match outside the gate is taken as an odometry fault (the prior is inflated
-  /// by the miss) when it is within these of the prediction; a larger miss rejects the match.
+  /// by the miss) when it is within these of the odometry prediction, or of the robot's previous
+  /// motion (stale odometry catching up); otherwise the match is rejected.
   double max_odometry_fault_translation = 0.3;  ///< m
   double max_odometry_fault_rotation = deg2rad(30.0);
 
