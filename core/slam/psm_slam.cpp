@@ -164,11 +164,47 @@ std::optional<PsmSlam::Observation> PsmSlam::trackReference(const PreparedScan& 
       return best;  // the same answer from both starts: the odometry was fine
   }
   // The odometry step was wrong: widen the prior by how far off it was, so the filter follows the match.
-  const Pose2 miss = between(prior.mean, other->z);
-  const double miss_xy = miss.translation().squaredNorm();
-  filter_.predict(Pose2(), Vec3(miss_xy, miss_xy, miss.theta * miss.theta).asDiagonal());
-  ++stats_.odometry_faults;
+  inflatePriorForMiss(prior, *other);
   return other;
+}
+
+void PsmSlam::inflatePriorForMiss(const RelativePosePrediction& prior, const Observation& o) {
+  // Rank-one inflation along the innovation ν (keyframe frame), rotated into the robot frame
+  // the prediction noise is expressed in: with S' = S + ννᵀ the innovation's χ² becomes
+  // c / (1 + c) < 1 (Sherman–Morrison), while directions the miss does not involve (along a
+  // corridor, say) keep the odometry's information.
+  const Vec3 nu(o.z.x - prior.mean.x, o.z.y - prior.mean.y, wrapAngle(o.z.theta - prior.mean.theta));
+  const double c = std::cos(prior.mean.theta), s = std::sin(prior.mean.theta);
+  const Vec3 v(c * nu.x() + s * nu.y(), -s * nu.x() + c * nu.y(), nu.z());
+  filter_.predict(Pose2(), v * v.transpose());
+  ++stats_.odometry_faults;
+}
+
+bool PsmSlam::plausibleOdometryFault(const RelativePosePrediction& prior, const Observation& o) const {
+  const Pose2 miss = between(prior.mean, o.z);
+  if (miss.translation().norm() <= params_.max_odometry_fault_translation &&
+      std::abs(miss.theta) <= params_.max_odometry_fault_rotation)
+    return true;
+  // Farther off, the match must agree with the robot's previous motion (constant velocity):
+  // stale odometry that catches up in one jump is off by a whole scan's motion or more.
+  const Pose2 keyframe_pose = filter_.keyframePose(o.keyframe);
+  const Pose2 constant_velocity = between(keyframe_pose, last_scan_pose_ * last_scan_motion_);
+  const Pose2 disagreement = between(constant_velocity, o.z);
+  return disagreement.translation().norm() <= params_.max_odometry_fault_translation &&
+         std::abs(disagreement.theta) <= params_.max_odometry_fault_rotation;
+}
+
+bool PsmSlam::applyTrackingMatch(const Observation& o) {
+  const int64_t active = filter_.activeKeyframe();
+  const RelativePosePrediction prior = filter_.predictRelative(active);
+  if (filter_.update(active, o.z, o.R, params_.chi2_gate).accepted) return true;
+  // A good match with the nearby reference outside the gate: the odometry step, not the match,
+  // is what is wrong (slip, heading jumps of 5-20 deg between scans on MIT CSAIL). Trust the
+  // match and inflate the prior by the miss, within bounds that a tracking match from a prior
+  // that far off could still be right.
+  if (!plausibleOdometryFault(prior, o)) return false;
+  inflatePriorForMiss(prior, o);
+  return filter_.update(active, o.z, o.R, params_.chi2_gate).accepted;
 }
 
 bool PsmSlam::goodMatch(const Observation& o, bool loop_candidate) const {
@@ -266,8 +302,7 @@ bool PsmSlam::selectReference(const LaserScan& scan, PreparedScan& prepared, con
   if (reuse) {
     reuseReference(*reuse, accepted);
   } else {
-    const bool linked = tracked.has_value();
-    addKeyframe(scan, std::move(prepared), accepted, linked ? std::nullopt : std::optional(link), previous);
+    addKeyframe(scan, std::move(prepared), accepted, link, previous);
   }
   return loop;
 }
@@ -337,15 +372,18 @@ void PsmSlam::reuseReference(const Observation& chosen, const std::vector<Observ
 }
 
 void PsmSlam::addKeyframe(const LaserScan& scan, PreparedScan prepared, const std::vector<Observation>& accepted,
-                          const std::optional<RelativePosePrediction>& odometry_link, int64_t previous) {
+                          const std::optional<RelativePosePrediction>& link, int64_t previous) {
   const int64_t id = static_cast<int64_t>(keyframes_.size());
   filter_.addKeyframe(id);
   filter_keyframes_.insert(id);
   graph_.addNode({id, scan.utime, filter_.robotPose()});
-  for (const Observation& o : accepted) addGraphEdge(o.keyframe, id, o.z, o.R, PoseGraphEdgeKind::Match);
-  if (odometry_link && previous >= 0)
-    addGraphEdge(previous, id, odometry_link->mean, odometry_link->cov + covarianceFloor(1e-3, 1e-3),
-                 PoseGraphEdgeKind::Odometry);
+  // The link to the previous reference is the filter's estimate of the relative pose (odometry
+  // and the tracking match fused), not the raw match: along a corridor the match leaves the
+  // translation free and only the odometry in the filter fixes it, which the graph must keep.
+  for (const Observation& o : accepted)
+    if (!link || o.keyframe != previous) addGraphEdge(o.keyframe, id, o.z, o.R, PoseGraphEdgeKind::Match);
+  if (link && previous >= 0)
+    addGraphEdge(previous, id, link->mean, link->cov + covarianceFloor(1e-3, 1e-3), PoseGraphEdgeKind::Odometry);
   keyframes_.push_back({id, scan.utime, scan.laser_pose, std::move(prepared)});
   ++stats_.keyframes;
   marginaliseOldKeyframes();
@@ -464,13 +502,12 @@ PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
     record(scan.utime, result);
     return result;
   }
-  const int64_t active = filter_.activeKeyframe();
   std::optional<Observation> tracked = trackReference(*prepared, scan.laser_pose);
   if (tracked && goodMatch(*tracked, false)) {
     if (odometry_still_ && robotStill(*tracked)) {
       result.held = true;
       ++stats_.held_scans;
-    } else if (filter_.update(active, tracked->z, tracked->R, params_.chi2_gate).accepted) {
+    } else if (applyTrackingMatch(*tracked)) {
       result.tracked = true;
       ++stats_.tracked_scans;
     } else {

@@ -12,11 +12,16 @@
 // previous scan; PSM matches the scan against the active reference scan from that prior; a
 // good match (converged, small error index, enough overlap, inside the χ² gate) updates the
 // filter, unless odometry and match agree the robot stands still, in which case the pose is held
-// (PSM's per-match jitter would otherwise accumulate). When the robot has moved too far from the
-// reference, or the overlap drops, the filter's uncertainty selects nearby reference scans
+// (PSM's per-match jitter would otherwise accumulate). A good match outside the gate that a
+// faulty odometry step explains (a heading jump, stale odometry catching up) is applied after
+// inflating the prior along the miss: real odometry, not the match, is what fails there. When
+// the robot has moved too far from the reference, or the overlap drops, the filter's
+// uncertainty selects nearby reference scans
 // (a Mahalanobis neighbourhood); each is matched, gated against the prediction and, if it
 // passes, applied. A close, well-overlapping one becomes the reference again; otherwise the
-// scan becomes a new reference. Matches with old reference scans are loop closures: they add
+// scan becomes a new reference, tied to the previous one in the pose graph by the filter's
+// relative pose (odometry and matches fused, so that a corridor's free direction keeps the
+// odometry). Matches with old reference scans are loop closures: they add
 // robust edges to the pose graph and trigger a Ceres optimisation whose poses go back into the
 // filter. Every scan's pose is stored relative to its reference scan, so the whole trajectory
 // follows the optimised graph.
@@ -139,6 +144,11 @@ class PsmSlam {
   /// Matches the scan against the active reference from the odometry prior, and from the
   /// previous motion when the two disagree (stale odometry); the better match wins.
   std::optional<Observation> trackReference(const PreparedScan& scan, const Pose2& mount);
+  /// Updates the filter with a good tracking match; when it fails the χ² gate but the miss is a
+  /// plausible odometry fault, the prior is inflated by the miss and the match applied.
+  bool applyTrackingMatch(const Observation& o);
+  bool plausibleOdometryFault(const RelativePosePrediction& prior, const Observation& o) const;
+  void inflatePriorForMiss(const RelativePosePrediction& prior, const Observation& o);
   bool goodMatch(const Observation& o, bool loop_candidate) const;
   bool robotStill(const Observation& tracked) const;
   bool needsNewReference(const std::optional<Observation>& tracked);
@@ -153,7 +163,7 @@ class PsmSlam {
   bool selectReference(const LaserScan& scan, PreparedScan& prepared, const std::optional<Observation>& tracked);
   void reuseReference(const Observation& chosen, const std::vector<Observation>& accepted);
   void addKeyframe(const LaserScan& scan, PreparedScan prepared, const std::vector<Observation>& accepted,
-                   const std::optional<RelativePosePrediction>& odometry_link, int64_t previous);
+                   const std::optional<RelativePosePrediction>& link, int64_t previous);
   void addGraphEdge(int64_t from, int64_t to, const Pose2& z, const Mat3& R, PoseGraphEdgeKind kind);
   void marginaliseOldKeyframes();
   void marginaliseKeyframe(int64_t id);

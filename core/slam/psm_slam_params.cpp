@@ -48,6 +48,8 @@ std::map<std::string, Setter> slamSetters(PsmSlamParams& p) {
       {"max_error_index", set(p.max_error_index)},
       {"min_overlap", set(p.min_overlap)},
       {"chi2_gate", set(p.chi2_gate)},
+      {"max_odometry_fault_translation", set(p.max_odometry_fault_translation)},
+      {"max_odometry_fault_rotation", set(p.max_odometry_fault_rotation)},
       {"keyframe_distance", set(p.keyframe_distance)},
       {"keyframe_angle", set(p.keyframe_angle)},
       {"keyframe_min_overlap", set(p.keyframe_min_overlap)},

@@ -20,7 +20,10 @@ struct PsmSlamParams {
   /// odometry goes stale for a scan or two and wheels slip, and a prior tighter than the match
   /// would make the χ² gate reject good matches.
   double time_noise_xy = 2e-4;           ///< m²/s
-  double time_noise_theta = 3e-4;        ///< rad²/s
+  /// MIT CSAIL tracking innovations: heading σ ≈ 1-3° per scan (5 Hz) on most scans beyond the
+  /// §17.6 model; 2e-3 rad²/s gives ≈ 1.2° per scan, and the rarer larger jumps are left to the
+  /// odometry-fault path (max_odometry_fault_*).
+  double time_noise_theta = 2e-3;        ///< rad²/s
   /// Without any odometry the prior is the previous scan-to-scan motion (constant velocity)
   /// with this much extra noise per second.
   double no_odometry_noise_xy = 0.5;     ///< m²/s
@@ -41,6 +44,11 @@ struct PsmSlamParams {
   /// Associated bearings over the smaller of the two scans' usable readings.
   double min_overlap = 0.35;
   double chi2_gate = 16.27;              ///< χ²₃(0.999) on the innovation of a tracking match
+  /// A good tracking match outside the gate is taken as an odometry fault (the prior is inflated
+  /// by the miss) when it is within these of the odometry prediction, or of the robot's previous
+  /// motion (stale odometry catching up); otherwise the match is rejected.
+  double max_odometry_fault_translation = 0.3;  ///< m
+  double max_odometry_fault_rotation = deg2rad(30.0);
 
   // --- reference scans (keyframes) ---
   double keyframe_distance = 0.6;        ///< m from the active reference scan

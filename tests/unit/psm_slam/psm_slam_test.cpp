@@ -96,6 +96,30 @@ TEST(PsmSlam, ReferenceScansAreAddedAsTheRobotMovesAndReusedWhenItReturns) {
   EXPECT_GT(static_cast<double>(two.stats.reference_reuses), 0.6 * skeleton);
 }
 
+TEST(PsmSlam, OdometryGlitchesAreOverruledByGoodMatches) {
+  // Real odometry (MIT CSAIL) goes stale for a scan and catches up in one jump, and its heading
+  // jumps by 15-20° between two scans. A good match with the nearby reference must win over
+  // such a step instead of failing the χ² gate and leaving the robot lost.
+  const World world = testing::makeLoopWorld();
+  SyntheticRunOptions options;
+  options.laps = 2;
+  const SyntheticRun clean = testing::simulateLoopRun(world, options);
+  SyntheticRun run = clean;
+  size_t glitches = 0;
+  for (size_t k = 20; k + 1 < run.odometry.size(); k += 25, ++glitches) {
+    if (glitches % 2 == 0) run.odometry[k].pose = run.odometry[k - 1].pose;  // stale, caught up at k + 1
+    else run.odometry[k].pose.theta = wrapAngle(run.odometry[k].pose.theta + deg2rad(18.0));  // undone at k + 1
+  }
+  const RunResult reference = runSlam(clean, testParams());
+  const RunResult result = runSlam(run, testParams());
+  EXPECT_EQ(result.stats.gate_rejections, 0u);
+  EXPECT_LE(result.stats.references_lost, reference.stats.references_lost);
+  EXPECT_GE(result.stats.odometry_faults, glitches);
+  EXPECT_GE(result.stats.loop_closures, 1u);
+  EXPECT_LT(maxPositionError(result.trajectory, run.truth), 0.10);
+  EXPECT_LT(maxHeadingError(result.trajectory, run.truth), deg2rad(2.0));
+}
+
 TEST(PsmSlam, StationaryRobotHoldsItsPose) {
   const World world = testing::makeLoopWorld();
   SyntheticRunOptions options;
