@@ -43,6 +43,11 @@ bool SequenceTracker::accept(const std::string& channel, int64_t seq) {
     last_[channel] = seq;
     return true;
   }
+  if (seq < it->second && (seq <= 1 || it->second - seq > kRestartJump)) {
+    ++restarts_;
+    it->second = seq;
+    return true;
+  }
   if (seq <= it->second) return false;
   dropped_ += seq - it->second - 1;
   it->second = seq;

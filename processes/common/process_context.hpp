@@ -21,14 +21,19 @@ namespace polarslam {
 int64_t nowUtime();
 
 /// Counts per-channel sequence gaps and repeats. Returns false for a duplicate or stale message.
+/// A sequence number that starts over (0 or 1, or far below the last one) is a restarted
+/// publisher, not a stale message: it is accepted and counted in restarts().
 class SequenceTracker {
  public:
+  static constexpr int64_t kRestartJump = 100;  ///< further back than this is a restart
+
   bool accept(const std::string& channel, int64_t seq);
   int64_t dropped() const { return dropped_; }
+  int64_t restarts() const { return restarts_; }
 
  private:
   std::map<std::string, int64_t> last_;
-  int64_t dropped_ = 0;
+  int64_t dropped_ = 0, restarts_ = 0;
 };
 
 class ProcessContext {
