@@ -10,20 +10,10 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "io/text_fields.hpp"
+
 namespace polarslam {
 namespace {
-
-std::vector<std::string_view> splitFields(std::string_view line) {
-  std::vector<std::string_view> fields;
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-    const size_t start = i;
-    while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
-    if (i > start) fields.push_back(line.substr(start, i - start));
-  }
-  return fields;
-}
 
 bool parseDouble(std::string_view text, double& value) {
   if (!text.empty() && text.front() == '+') text.remove_prefix(1);

@@ -112,6 +112,8 @@ class FeatureSlam {
 
   /// The latest pose: the filter's, moved on by odometry not yet processed.
   PoseStamped currentPose() const;
+  /// False until the first odometry or features: currentPose() has no time yet.
+  bool started() const { return filter_time_ != std::numeric_limits<int64_t>::min(); }
   /// The confirmed map (lines normalised to d ≥ 0) with the filter's robot pose.
   FeatureMap map() const;
   /// Map features near the robot as seen from the current filter pose.

@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
       for (const ScanAnchors& a : slam.takeAnchors()) context.publish(anchors_channel, toLcm(a, anchor_seq++));
       slam.takePoses();  // the live pose below already includes them
       slam.takeMatches();
+      if (!slam.started()) return;  // nothing received yet that gives the pose a time
       const PoseStamped pose = slam.currentPose();
       context.publish(pose_channel, toLcm(pose, "map", pose_seq++));
       const FeatureMap map = slam.map();
