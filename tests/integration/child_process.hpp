@@ -7,6 +7,9 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -75,5 +78,20 @@ class ChildProcess {
   bool exited_ = false;
   int exit_code_ = -1;
 };
+
+/// The whole content of a text file ("" when it cannot be read).
+inline std::string readFile(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// Runs a command to its end, its output into `out`; its exit code, or -1 if it outlived `limit`.
+inline int runToEnd(const std::vector<std::string>& argv, const std::filesystem::path& out, std::chrono::seconds limit) {
+  ChildProcess p(argv, out.string());
+  if (!p.waitFor(limit)) return -1;
+  return p.exitCode();
+}
 
 }  // namespace polarslam::testing

@@ -20,18 +20,13 @@
 using namespace std::chrono_literals;
 using polarslam::testing::binPath;
 using polarslam::testing::ChildProcess;
+using polarslam::testing::readFile;
+using polarslam::testing::runToEnd;
 using polarslam::testing::sourcePath;
 
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 std::string groupFile(const fs::path& dir) {
   const std::string robot = sourcePath("config/robots/default.yaml");
@@ -74,10 +69,11 @@ RunFigures figuresOf(const fs::path& run_dir) {
   while (reader.next(event))
     if (event.channel == "SLAM_MAP" && event.decode(map)) f.map_features = map.num_features;
   const fs::path eval = run_dir / "eval";
-  ChildProcess run({binPath("polarslam"), "run", "--log", (run_dir / "recorded.lcmlog").string(), "--pipeline", "recorded",
-                    "--pose-channel", "SLAM_POSE", "--out", eval.string()},
-                   (run_dir / "eval.out").string());
-  EXPECT_TRUE(run.waitFor(60s));
+  EXPECT_EQ(runToEnd({binPath("polarslam"), "run", "--log", (run_dir / "recorded.lcmlog").string(), "--pipeline",
+                      "recorded", "--pose-channel", "SLAM_POSE", "--out", eval.string()},
+                     run_dir / "eval.out", 60s),
+            0)
+      << readFile(run_dir / "eval.out");
   std::ifstream in(eval / "report.json");
   const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
   f.ate_rmse = report.value("ate_rmse_m", 1e9);

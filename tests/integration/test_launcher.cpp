@@ -29,6 +29,7 @@ using namespace std::chrono_literals;
 using polarslam::process_status_t;
 using polarslam::testing::binPath;
 using polarslam::testing::ChildProcess;
+using polarslam::testing::readFile;
 using polarslam::testing::sourcePath;
 
 namespace {
@@ -40,13 +41,6 @@ std::filesystem::path launcherScratch(const std::string& name) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
-}
-
-std::string readFile(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 std::string writeFile(const std::filesystem::path& path, const std::string& text) {
@@ -347,9 +341,8 @@ namespace {
 
 /// Runs a command to its end; returns its exit code and output.
 std::pair<int, std::string> runCommand(const std::vector<std::string>& argv, const std::filesystem::path& out) {
-  ChildProcess p(argv, out.string());
-  if (!p.waitFor(30s)) return {-1, "timed out"};
-  return {p.exitCode(), readFile(out)};
+  const int code = polarslam::testing::runToEnd(argv, out, 30s);
+  return {code, code == -1 ? "timed out" : readFile(out)};
 }
 
 /// Two network namespaces joined by a veth pair on a private test subnet, each with a multicast

@@ -14,6 +14,8 @@
 using namespace std::chrono_literals;
 using polarslam::testing::binPath;
 using polarslam::testing::ChildProcess;
+using polarslam::testing::readFile;
+using polarslam::testing::runToEnd;
 using polarslam::testing::sourcePath;
 
 namespace {
@@ -24,12 +26,6 @@ std::map<std::string, long> channelCounts(const std::string& log_path) {
   polarslam::LogEvent event;
   while (reader.next(event)) ++counts[event.channel];
   return counts;
-}
-
-int runToEnd(const std::vector<std::string>& argv, const std::filesystem::path& out, std::chrono::seconds limit) {
-  ChildProcess p(argv, out.string());
-  if (!p.waitFor(limit)) return -1;
-  return p.exitCode();
 }
 
 nlohmann::json readJson(const std::filesystem::path& path) {
@@ -54,8 +50,7 @@ TEST(Replay, LogPlayedIntoTheLiveProcessesIsRecordedScoredAndReplaysAgain) {
                                     binPath("polarslam-launch"), sourcePath("config/groups/replay.yaml"), "--no-tui",
                                     "--run-dir", run_dir.string()},
                                    dir / "launch.out", 120s);
-  std::ifstream launch_out(dir / "launch.out");
-  const std::string launch_text((std::istreambuf_iterator<char>(launch_out)), {});
+  const std::string launch_text = readFile(dir / "launch.out");
   ASSERT_EQ(launch_exit, 0) << launch_text;
   EXPECT_NE(launch_text.find("[launch] player is required: stopping everything"), std::string::npos) << launch_text;
 

@@ -15,24 +15,13 @@
 using namespace std::chrono_literals;
 using polarslam::testing::binPath;
 using polarslam::testing::ChildProcess;
+using polarslam::testing::readFile;
+using polarslam::testing::runToEnd;
 using polarslam::testing::sourcePath;
 
 namespace {
 
 namespace fs = std::filesystem;
-
-int runToEnd(const std::vector<std::string>& argv, const fs::path& out, std::chrono::seconds limit) {
-  ChildProcess p(argv, out.string());
-  if (!p.waitFor(limit)) return -1;
-  return p.exitCode();
-}
-
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 std::string findChromium() {
   for (const char* path : {"/usr/bin/chromium", "/usr/bin/chromium-browser", "/usr/bin/google-chrome"})
