@@ -94,6 +94,28 @@ double corridorDirection(const std::vector<double>& angles) {
   return foldAngle(centre + (count > 0 ? sum / count : 0.0));
 }
 
+/// What PSM's joint system needs of the reference alone, so that each match iteration only adds
+/// the pose-dependent part.
+void computeSurfaceTerms(PreparedScan& scan) {
+  const size_t n = scan.size();
+  const BeamGeometry& g = *scan.geometry;
+  auto& s = scan.surface;
+  for (auto* v : {&s.rho, &s.cos_beta, &s.normal_x, &s.normal_y, &s.rho_cos_beta})
+    v->assign(n, std::numeric_limits<double>::quiet_NaN());
+  for (size_t j = 0; j < n; ++j) {
+    const double slope = scan.slope[j] / g.angle_increment;  // ∂r/∂φ
+    if (scan.bad(j) || !std::isfinite(slope)) continue;
+    const double rho = slope / scan.range[j];
+    const double cos_beta = 1.0 / std::sqrt(1.0 + rho * rho);
+    const double co = g.cos_table[j], si = g.sin_table[j];
+    s.rho[j] = rho;
+    s.cos_beta[j] = cos_beta;
+    s.normal_x[j] = (co + rho * si) * cos_beta;
+    s.normal_y[j] = (si - rho * co) * cos_beta;
+    s.rho_cos_beta[j] = rho * cos_beta;
+  }
+}
+
 }  // namespace
 
 void medianFilter5(const std::vector<float>& in, std::vector<float>& out) {
@@ -239,6 +261,7 @@ PreparedScan prepareScan(const LaserScan& scan, const PsmParams& params) {
     else
       out.slope[i] = 0.5f * (out.range[i + 1] - out.range[i - 1]);
   }
+  computeSurfaceTerms(out);
   out.corridor = detectCorridor(out, params.corridor_threshold);
   return out;
 }

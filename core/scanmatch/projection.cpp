@@ -47,6 +47,14 @@ Floats maximum(Floats a, Floats b) { return a > b ? a : b; }
 Ints minimum(Ints a, Ints b) { return a < b ? a : b; }
 Ints maximum(Ints a, Ints b) { return a > b ? a : b; }
 Floats absolute(Floats a) { return (Floats)((Ints)a & splat(INT32_MAX)); }
+Floats squareRoot(Floats a) {
+#if defined(__SSE__)
+  return __builtin_ia32_sqrtps(a);
+#else
+  for (size_t k = 0; k < kSimdWidth; ++k) a[k] = std::sqrt(a[k]);
+  return a;
+#endif
+}
 
 /// Transforms the readings into the reference frame and takes the fractional index of their
 /// bearing: atan2 by a degree-13 odd polynomial fitted to atan on [0, 1] (2.5e-7 rad), folded
@@ -121,6 +129,7 @@ void spanPairs(const PreparedScan& cur, const BeamGeometry& g, Projection& out) 
     store(&out.dx[i], dx);
     store(&out.dy[i], dy);
     store(&out.cross[i], x0 * dy - y0 * dx);
+    store(&out.near_end[i], squareRoot(minimum(x0 * x0 + y0 * y0, x1 * x1 + y1 * y1)));
   }
 }
 
@@ -130,7 +139,7 @@ void projectScan(const BeamGeometry& g, const PreparedScan& cur, const Pose2& po
   const size_t padded = cur.xf.size();
   out.range.assign(g.size, kInfF);
   out.tag.assign(g.size, kFlagEmpty);
-  for (auto* v : {&out.px, &out.py, &out.index, &out.dx, &out.dy, &out.cross}) v->resize(padded);
+  for (auto* v : {&out.px, &out.py, &out.index, &out.dx, &out.dy, &out.cross, &out.near_end}) v->resize(padded);
   for (auto* v : {&out.first, &out.count, &out.back_facing}) v->resize(padded);
   projectReadings(cur, pose, g, out);
   spanPairs(cur, g, out);
@@ -141,11 +150,10 @@ void projectScan(const BeamGeometry& g, const PreparedScan& cur, const Pose2& po
   const float* dxs = out.dx.data();
   const float* dys = out.dy.data();
   const float* crosses = out.cross.data();
+  const float* near_ends = out.near_end.data();
   const int32_t* firsts = out.first.data();
   const int32_t* counts = out.count.data();
   const int32_t* back_facing = out.back_facing.data();
-  const float* px = out.px.data();
-  const float* py = out.py.data();
   float* range = out.range.data();
   uint8_t* tag = out.tag.data();
   const size_t m = cur.size();
@@ -158,8 +166,7 @@ void projectScan(const BeamGeometry& g, const PreparedScan& cur, const Pose2& po
     for (int32_t j = firsts[i]; j < end; ++j) {
       // The ray t·u_j meets the line a + λ·d at t = (a × d)/(u_j × d).
       float r = cross / (cos_table[j] * dy - sin_table[j] * dx);
-      if (!(r > 0.0f && r < kInfF))  // the segment lies along the ray: take its near end
-        r = std::min(std::hypot(px[i - 1], py[i - 1]), std::hypot(px[i], py[i]));
+      if (!(r > 0.0f && r < kInfF)) r = near_ends[i];  // the segment lies along the ray
       if (r < range[j]) {
         range[j] = r;
         tag[j] = sample_tag;

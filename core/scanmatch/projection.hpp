@@ -22,6 +22,7 @@ struct Projection {
   // how many it covers, whether the surface is seen from behind, and the line through the two.
   std::vector<int32_t> first, count, back_facing;
   std::vector<float> dx, dy, cross;
+  std::vector<float> near_end;  ///< range of the pair's nearer reading (for rays along the line)
 };
 
 /// Projects `cur`, whose laser sits at `pose` in the reference laser frame, onto the bearings of

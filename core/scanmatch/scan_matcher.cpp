@@ -372,6 +372,21 @@ bool plausible(const Pose2& pose, double max_range) {
   return finitePose(pose) && std::abs(pose.x) < 2.0 * max_range && std::abs(pose.y) < 2.0 * max_range;
 }
 
+/// The end of every iteration: true when the match failed, left any plausible region
+/// (status Diverged), or has converged (§9).
+bool iterationEnds(MatchResult& result, StopRule& stop, double max_range) {
+  if (!result.ok()) return true;
+  if (!plausible(result.pose, max_range)) {
+    result.status = MatchStatus::Diverged;
+    return true;
+  }
+  if (result.converged || stop.done()) {
+    result.converged = true;
+    return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 MatchResult ScanMatcher::matchPsm(const PreparedScan& ref, const PreparedScan& cur, const Pose2& guess) {
@@ -425,15 +440,7 @@ MatchResult ScanMatcher::matchPsm(const PreparedScan& ref, const PreparedScan& c
       translated = true;
     }
     ++iteration;
-    if (!result.ok()) break;
-    if (!plausible(result.pose, params_.max_range)) {
-      result.status = MatchStatus::Diverged;
-      break;
-    }
-    if (result.converged || stop.done()) {
-      result.converged = true;
-      break;
-    }
+    if (iterationEnds(result, stop, params_.max_range)) break;
     joint = joint || (params_.joint_refinement && translated && rotated &&
                       last_translation < params_.joint_switch_translation &&
                       last_rotation < params_.joint_switch_rotation);
@@ -502,15 +509,7 @@ MatchResult ScanMatcher::matchPsmC(const PreparedScan& ref, const PreparedScan& 
       stop.moved(step.delta);
     }
     ++iteration;
-    if (!result.ok()) break;
-    if (!plausible(result.pose, params_.max_range)) {
-      result.status = MatchStatus::Diverged;
-      break;
-    }
-    if (stop.done()) {
-      result.converged = true;
-      break;
-    }
+    if (iterationEnds(result, stop, params_.max_range)) break;
   }
   result.iterations = iteration;
   if (result.ok()) estimateCovariance(ref, cur, result);
@@ -594,14 +593,7 @@ MatchResult ScanMatcher::matchIcp(const PreparedScan& ref, const PreparedScan& c
     stop.translated(result.pose.x - before.x, result.pose.y - before.y);
     stop.rotated(delta.theta);
     ++iteration;
-    if (!plausible(result.pose, params_.max_range)) {
-      result.status = MatchStatus::Diverged;
-      break;
-    }
-    if (stop.done()) {
-      result.converged = true;
-      break;
-    }
+    if (iterationEnds(result, stop, params_.max_range)) break;
   }
   result.iterations = iteration;
   if (result.ok()) estimateCovariance(ref, cur, result);
@@ -639,15 +631,11 @@ Mat3 ScanMatcher::heuristicCovariance(const PreparedScan& ref, double error_inde
 }
 
 ScanMatcher::JointSystem ScanMatcher::jointSystem(const PreparedScan& ref, const Pose2& pose, double c) const {
-  const BeamGeometry& g = *ref.geometry;
   const float* projected = projection_.range.data();
   const uint8_t* tag = projection_.tag.data();
   const float* measured = ref.range.data();
-  const float* ref_slope = ref.slope.data();
   const uint8_t* flags = ref.flags.data();
-  const double* cos_table = g.cos_table.data();
-  const double* sin_table = g.sin_table.data();
-  const double inverse_increment = 1.0 / g.angle_increment;
+  const PreparedScan::SurfaceTerms& surface = ref.surface;
   const double min_range = params_.min_range, max_range = params_.max_range;
   const double max_error = params_.max_error, max_slope = params_.max_slope;
   double a11 = 0, a12 = 0, a13 = 0, a22 = 0, a23 = 0, a33 = 0, g1 = 0, g2 = 0, g3 = 0;
@@ -664,21 +652,16 @@ ScanMatcher::JointSystem ScanMatcher::jointSystem(const PreparedScan& ref, const
       sum_abs += abs_e;
       ++gated;
     }
-    // The surface's slope from the reference scan (at the solution the projected profile has
-    // the same), as a point-to-line method takes the line from the reference.
-    const double slope = ref_slope[j] * inverse_increment;  // ∂r/∂φ
-    if (abs_e >= max_error || !std::isfinite(slope)) continue;
-    const double rho = slope / measured[j];
-    if (std::abs(rho) > max_slope) continue;  // grazing: neither the slope nor the range is reliable
-    const double cos_beta = 1.0 / std::sqrt(1.0 + rho * rho);
-    const double co = cos_table[j], si = sin_table[j];
-    // Range change for a translation of a surface with slope ρ, and for a rotation about the
-    // current origin (a rotation about the reference origin, −∂r''/∂φ, plus the translation
-    // δθ·(y', −x') the two differ by); everything scaled by cos β to normal distances.
-    const double c1 = co + rho * si, c2 = si - rho * co;
-    const double h1 = c1 * cos_beta, h2 = c2 * cos_beta;
-    const double h3 = (pose.y * c1 - pose.x * c2 - rho * r) * cos_beta;
-    const double en = e * cos_beta;
+    // The surface's slope ρ from the reference scan (at the solution the projected profile has
+    // the same), as a point-to-line method takes the line from the reference. Grazing surfaces
+    // (and unknown slopes, NaN) are skipped: neither the slope nor the range is reliable.
+    if (abs_e >= max_error || !(std::abs(surface.rho[j]) <= max_slope)) continue;
+    // Range change for a translation of a surface with slope ρ (the normal terms h1, h2), and
+    // for a rotation about the current origin (a rotation about the reference origin, −∂r''/∂φ,
+    // plus the translation δθ·(y', −x') the two differ by); all scaled by cos β to normal distances.
+    const double h1 = surface.normal_x[j], h2 = surface.normal_y[j];
+    const double h3 = pose.y * h1 - pose.x * h2 - surface.rho_cos_beta[j] * r;
+    const double en = e * surface.cos_beta[j];
     const double w = c / (c + e * e);
     const double wh1 = w * h1, wh2 = w * h2, wh3 = w * h3;
     a11 += wh1 * h1; a12 += wh1 * h2; a13 += wh1 * h3;

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "common/input_journal.hpp"
+#include "common/lcm_convert.hpp"
 #include "common/lcm_decode.hpp"
 
 namespace polarslam {
@@ -63,6 +64,19 @@ class ProcessContext {
     s->setQueueCapacity(1000);
     sub->channel = channel;
     subscriptions_.push_back(std::move(sub));
+  }
+
+  /// The usual input path: decode as MsgT, convert to the core type ValueT (a conversion that
+  /// fails is rejected with its reason), check the sequence number, then call `handler`, which
+  /// counts the message handled (or rejects it) itself.
+  template <typename MsgT, typename ValueT>
+  void subscribeConverted(const std::string& channel, std::function<void(ValueT&)> handler) {
+    subscribe<MsgT>(channel, [this, channel, handler](const MsgT& msg) {
+      ValueT value;
+      if (const std::string why = fromLcm(msg, value); !why.empty()) return reject(why);
+      if (!checkSequence(channel, msg.seq)) return;
+      handler(value);
+    });
   }
 
   /// Nothing is published while the journal is replayed: those messages went out before.

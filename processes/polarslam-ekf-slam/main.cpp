@@ -60,16 +60,12 @@ int main(int argc, char** argv) {
       context.reject(why);
       return true;
     };
-    context.subscribe<polarslam::odometry_t>(odometry_channel, [&](const polarslam::odometry_t& msg) {
-      OdometryReading reading;
-      if (rejectIf(fromLcm(msg, reading)) || !context.checkSequence(odometry_channel, msg.seq)) return;
+    context.subscribeConverted<polarslam::odometry_t, OdometryReading>(odometry_channel, [&](OdometryReading& reading) {
       if (rejectIf(slam.addOdometry(reading))) return;
       context.handled();
       publishOutputs();
     });
-    context.subscribe<polarslam::features_t>(features_channel, [&](const polarslam::features_t& msg) {
-      FeatureSet set;
-      if (rejectIf(fromLcm(msg, set)) || !context.checkSequence(features_channel, msg.seq)) return;
+    context.subscribeConverted<polarslam::features_t, FeatureSet>(features_channel, [&](FeatureSet& set) {
       if (rejectIf(slam.addFeatures(set))) return;
       context.handled();
       publishOutputs();

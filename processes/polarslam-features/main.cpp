@@ -30,10 +30,7 @@ int main(int argc, char** argv) {
     ProcessContext context("polarslam-features", url);
     std::optional<OdometryReading> odometry;  // latest reading: the robot's speed
     int64_t out_seq = 0;
-    context.subscribe<polarslam::laser_scan_t>(laser_channel, [&](const polarslam::laser_scan_t& msg) {
-      LaserScan scan;
-      if (const std::string why = fromLcm(msg, scan); !why.empty()) return context.reject(why);
-      if (!context.checkSequence(laser_channel, msg.seq)) return;
+    context.subscribeConverted<polarslam::laser_scan_t, LaserScan>(laser_channel, [&](LaserScan& scan) {
       SensorMotion motion;
       if (odometry && std::llabs(odometry->utime - scan.utime) < 500000)
         motion = sensorMotionFromBaseTwist(scan.laser_pose, odometry->v, odometry->omega);
@@ -43,10 +40,7 @@ int main(int argc, char** argv) {
       context.handled();
     });
     if (!odometry_channel.empty())
-      context.subscribe<polarslam::odometry_t>(odometry_channel, [&](const polarslam::odometry_t& msg) {
-        OdometryReading reading;
-        if (const std::string why = fromLcm(msg, reading); !why.empty()) return context.reject(why);
-        if (!context.checkSequence(odometry_channel, msg.seq)) return;
+      context.subscribeConverted<polarslam::odometry_t, OdometryReading>(odometry_channel, [&](OdometryReading& reading) {
         odometry = reading;
         context.handled();
       });

@@ -42,34 +42,22 @@ int main(int argc, char** argv) {
         context.publish(out_channel, toLcm(set));
       }
     };
-    context.subscribe<polarslam::features_t>(laser_features_channel, [&](const polarslam::features_t& msg) {
-      FeatureSet set;
-      if (const std::string why = fromLcm(msg, set); !why.empty()) return context.reject(why);
-      if (!context.checkSequence(laser_features_channel, msg.seq)) return;
+    context.subscribeConverted<polarslam::features_t, FeatureSet>(laser_features_channel, [&](FeatureSet& set) {
       if (!fusion.addLaserFeatures(set)) return context.reject("laser features: late or not in use");
       context.handled();
       publishReady();
     });
-    context.subscribe<polarslam::sonar_targets_t>(sonar_channel, [&](const polarslam::sonar_targets_t& msg) {
-      SonarScan scan;
-      if (const std::string why = fromLcm(msg, scan); !why.empty()) return context.reject(why);
-      if (!context.checkSequence(sonar_channel, msg.seq)) return;
+    context.subscribeConverted<polarslam::sonar_targets_t, SonarScan>(sonar_channel, [&](SonarScan& scan) {
       if (!fusion.addSonar(scan)) return context.reject("sonar: late or not in use");
       context.handled();
       publishReady();
     });
-    context.subscribe<polarslam::laser_scan_t>(laser_channel, [&](const polarslam::laser_scan_t& msg) {
-      LaserScan scan;
-      if (const std::string why = fromLcm(msg, scan); !why.empty()) return context.reject(why);
-      if (!context.checkSequence(laser_channel, msg.seq)) return;
+    context.subscribeConverted<polarslam::laser_scan_t, LaserScan>(laser_channel, [&](LaserScan& scan) {
       fusion.addLaserScan(scan);
       context.handled();
       publishReady();
     });
-    context.subscribe<polarslam::odometry_t>(odometry_channel, [&](const polarslam::odometry_t& msg) {
-      OdometryReading reading;
-      if (const std::string why = fromLcm(msg, reading); !why.empty()) return context.reject(why);
-      if (!context.checkSequence(odometry_channel, msg.seq)) return;
+    context.subscribeConverted<polarslam::odometry_t, OdometryReading>(odometry_channel, [&](OdometryReading& reading) {
       if (!fusion.addOdometry(reading)) return context.reject("odometry: out of order");
       context.handled();
       publishReady();

@@ -71,9 +71,10 @@ class GridNode {
 
   void subscribe() {
     const Channels& c = o_.channels;
-    context_.subscribe<polarslam::laser_scan_t>(c.laser, [this](const auto& msg) { onLaser(msg); });
-    context_.subscribe<polarslam::scan_anchors_t>(c.anchors, [this](const auto& msg) { onAnchors(msg); });
-    context_.subscribe<polarslam::slam_map_t>(c.map, [this](const auto& msg) { onMap(msg); });
+    context_.subscribeConverted<polarslam::laser_scan_t, LaserScan>(c.laser, [this](LaserScan& s) { onLaser(s); });
+    context_.subscribeConverted<polarslam::scan_anchors_t, ScanAnchors>(c.anchors,
+                                                                        [this](ScanAnchors& a) { onAnchors(a); });
+    context_.subscribeConverted<polarslam::slam_map_t, FeatureMap>(c.map, [this](FeatureMap& m) { onMap(m); });
     context_.subscribe<polarslam::pose_t>(c.pose, [this](const auto& msg) { onPose(msg); });
     context_.subscribe<polarslam::grid_request_t>(c.request, [this](const auto& msg) { onRequest(msg); });
     context_.subscribe<polarslam::goal_t>(c.goal, [this](const auto& msg) { onGoal(msg); });
@@ -106,24 +107,18 @@ class GridNode {
     return true;
   }
 
-  void onLaser(const polarslam::laser_scan_t& msg) {
-    LaserScan scan;
-    if (rejectIf(fromLcm(msg, scan)) || !context_.checkSequence(o_.channels.laser, msg.seq)) return;
+  void onLaser(LaserScan& scan) {
     store_.addScan(std::move(scan));
     context_.handled();
   }
 
-  void onAnchors(const polarslam::scan_anchors_t& msg) {
-    ScanAnchors anchors;
-    if (rejectIf(fromLcm(msg, anchors)) || !context_.checkSequence(o_.channels.anchors, msg.seq)) return;
+  void onAnchors(ScanAnchors& anchors) {
     robot_ = anchors.pose.pose;
     store_.addAnchors(std::move(anchors));
     context_.handled();
   }
 
-  void onMap(const polarslam::slam_map_t& msg) {
-    FeatureMap map;
-    if (rejectIf(fromLcm(msg, map)) || !context_.checkSequence(o_.channels.map, msg.seq)) return;
+  void onMap(FeatureMap& map) {
     map_ = std::move(map);
     robot_ = map_.robot.pose;
     ++map_seq_;

@@ -72,13 +72,7 @@ int main(int argc, char** argv) {
     context.enableJournal(journal);
     GraphPublisher graph(context, channels.graph, graph_period);
     int64_t pose_seq = 0, last_utime = 0;
-    context.subscribe<polarslam::laser_scan_t>(channels.laser, [&](const polarslam::laser_scan_t& msg) {
-      LaserScan scan;
-      if (const std::string why = fromLcm(msg, scan); !why.empty()) {
-        context.reject(why);
-        return;
-      }
-      if (!context.checkSequence(channels.laser, msg.seq)) return;
+    context.subscribeConverted<polarslam::laser_scan_t, LaserScan>(channels.laser, [&](LaserScan& scan) {
       const PsmSlamScanResult r = slam.addScan(scan);
       if (!r.usable) context.reject("laser: too few usable readings to match");
       context.publish(channels.pose, toLcm(r.pose, "map", pose_seq++));
@@ -87,13 +81,7 @@ int main(int argc, char** argv) {
       graph.publishIfDue(slam, last_utime);
       context.handled();
     });
-    context.subscribe<polarslam::odometry_t>(channels.odometry, [&](const polarslam::odometry_t& msg) {
-      OdometryReading reading;
-      if (const std::string why = fromLcm(msg, reading); !why.empty()) {
-        context.reject(why);
-        return;
-      }
-      if (!context.checkSequence(channels.odometry, msg.seq)) return;
+    context.subscribeConverted<polarslam::odometry_t, OdometryReading>(channels.odometry, [&](OdometryReading& reading) {
       slam.addOdometry(reading);
       context.handled();
     });

@@ -65,26 +65,14 @@ int main(int argc, char** argv) {
     ProcessContext context("polarslam-psm", url);
     LaserOdometry odometry(params, psm);
     int64_t pose_seq = 0, match_seq = 0;
-    context.subscribe<polarslam::laser_scan_t>(channels.laser, [&](const polarslam::laser_scan_t& msg) {
-      LaserScan scan;
-      if (const std::string why = fromLcm(msg, scan); !why.empty()) {
-        context.reject(why);
-        return;
-      }
-      if (!context.checkSequence(channels.laser, msg.seq)) return;
+    context.subscribeConverted<polarslam::laser_scan_t, LaserScan>(channels.laser, [&](LaserScan& scan) {
       const LaserOdometryUpdate u = odometry.addScan(scan);
       context.publish(channels.pose, toLcm(PoseStamped{u.utime, u.pose, u.cov}, "odom", pose_seq++));
       if (u.matched) context.publish(channels.matches, matchMessage(u, params.method, match_seq++));
       context.handled();
     });
     if (!ignore_odometry) {
-      context.subscribe<polarslam::odometry_t>(channels.odometry, [&](const polarslam::odometry_t& msg) {
-        OdometryReading reading;
-        if (const std::string why = fromLcm(msg, reading); !why.empty()) {
-          context.reject(why);
-          return;
-        }
-        if (!context.checkSequence(channels.odometry, msg.seq)) return;
+      context.subscribeConverted<polarslam::odometry_t, OdometryReading>(channels.odometry, [&](OdometryReading& reading) {
         odometry.addOdometry(reading);
         context.handled();
       });
