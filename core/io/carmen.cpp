@@ -1,13 +1,10 @@
 #include "io/carmen.hpp"
 
 #include <algorithm>
-#include <charconv>
-#include <cmath>
-#include <fstream>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <sstream>
-#include <stdexcept>
 #include <string_view>
 
 #include "io/log_lines.hpp"

@@ -69,7 +69,8 @@ struct CarmenLog {
 
 /// Reads a CARMEN log from a stream.
 CarmenLog readCarmenLog(std::istream& in, const CarmenOptions& options = {});
-/// Reads a CARMEN log file; throws std::runtime_error naming the file when it cannot be opened.
+/// Reads a CARMEN log file, plain or gzip; throws std::runtime_error naming the file when it cannot
+/// be read.
 CarmenLog readCarmenLogFile(const std::string& path, const CarmenOptions& options = {});
 
 /// Bearing grid of a FLASER line, which records only the beam count (§20.3): 180 beams = 1° from
