@@ -163,6 +163,35 @@ TEST(CmuLog, ReadsGzipAndPlainFilesAlike) {
   EXPECT_THROW(readCmuLogFile((dir.path / "absent.log").string()), std::runtime_error);
 }
 
+TEST(CmuLog, TruncatedGzipIsAnErrorNotAShortLog) {
+  TempDir dir;
+  std::string text;
+  for (int k = 0; k < 200; ++k) text += cmuLaserLine(k, 0, 0, std::to_string(k) + ".5") + "\n";
+  const auto path = dir.path / "robotdata.log.gz";
+  writeGzip(path, text);
+  std::filesystem::resize_file(path, std::filesystem::file_size(path) / 2);
+  try {
+    readCmuLogFile(path.string());
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+  }
+}
+
+TEST(CmuLog, CarmenFilesMayBeGzipToo) {
+  TempDir dir;
+  std::ostringstream flaser;
+  flaser << "FLASER 181";
+  for (int i = 0; i < 181; ++i) flaser << " 2.5";
+  flaser << " 0 0 0 1 2 0.25 1134864645.903210 host 12.5\n";
+  writeGzip(dir.path / "log.clf.gz", flaser.str());
+  const RangeLog log = readRangeLogFile((dir.path / "log.clf.gz").string());
+  EXPECT_EQ(log.format, "carmen");
+  ASSERT_EQ(log.laserCount(), 1);
+  EXPECT_EQ(scans(log)[0]->utime, 1134864645903210);
+  EXPECT_EQ(readCarmenLogFile((dir.path / "log.clf.gz").string()).flaser_lines, 1);
+}
+
 // ---------------------------------------------------------------------------------------- Duke
 
 std::string dukeLaserLine(int beams, double range) {
