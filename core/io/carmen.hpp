@@ -43,9 +43,15 @@ struct CarmenIssue {
   std::string reason;
 };
 
+/// A range log read into memory: laser scans and odometry in file order. CARMEN's type, shared by
+/// the readers of the other formats (io/range_log.hpp names it RangeLog); the per-kind counters
+/// below that name CARMEN messages stay zero for them, `line_kinds` counts their line kinds.
 struct CarmenLog {
+  std::string format = "carmen";   ///< carmen, cmu, duke or mines
   std::vector<CarmenEvent> events;  ///< in file order
   int64_t lines = 0;
+  std::map<std::string, int64_t> line_kinds;  ///< lines read, by kind (non-CARMEN formats)
+  std::vector<std::string> notes;  ///< what the reader assumed or derived, for the user
   int64_t flaser_lines = 0, robotlaser_lines = 0, odom_lines = 0;
   int64_t comment_lines = 0;  ///< blank lines and '#' comments
   std::map<std::string, int64_t> skipped_kinds;  ///< other message types (PARAM, SYNC, OLD...), by name
@@ -63,7 +69,8 @@ struct CarmenLog {
 
 /// Reads a CARMEN log from a stream.
 CarmenLog readCarmenLog(std::istream& in, const CarmenOptions& options = {});
-/// Reads a CARMEN log file; throws std::runtime_error naming the file when it cannot be opened.
+/// Reads a CARMEN log file, plain or gzip; throws std::runtime_error naming the file when it cannot
+/// be read.
 CarmenLog readCarmenLogFile(const std::string& path, const CarmenOptions& options = {});
 
 /// Bearing grid of a FLASER line, which records only the beam count (§20.3): 180 beams = 1° from
