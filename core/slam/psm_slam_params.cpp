@@ -62,9 +62,13 @@ std::map<std::string, Setter> slamSetters(PsmSlamParams& p) {
       {"odometry_k_heading_per_rad", set(p.odometry.poses.k_heading_per_rad)},
       {"odometry_k_heading_per_m", set(p.odometry.poses.k_heading_per_m)},
 
+      {"stationary_odometry_translation", set(p.stationary_odometry_translation)},
+      {"stationary_odometry_rotation", set(p.stationary_odometry_rotation)},
       {"stationary_match_translation", set(p.stationary_match_translation)},
       {"stationary_match_rotation", set(p.stationary_match_rotation)},
       {"loop_search_radius", set(p.loop_search_radius)},
+      {"loop_max_heading_difference", set(p.loop_max_heading_difference)},
+      {"loop_candidate_sigmas", set(p.loop_candidate_sigmas)},
       {"loop_min_keyframe_gap", set(p.loop_min_keyframe_gap)},
       {"max_candidates_per_scan", set(p.max_candidates_per_scan)},
       {"loop_max_error_index", set(p.loop_max_error_index)},

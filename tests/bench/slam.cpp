@@ -3,7 +3,8 @@
 //     corridor with only small features, each seed's simulated run is fed to the three
 //     configurations at once (same sensor data); ATE, maximum error, map size and whether the run
 //     succeeded (bounded error and a closed loop) are printed per configuration, and the seeds
-//     where fused succeeds while a single-sensor run fails are counted.
+//     where fused succeeds while a single-sensor run fails are counted. PSM SLAM (laser and
+//     odometry) runs on the same data: its ATE stands next to the EKF's.
 //  2. Filter consistency: the average NEES of the robot pose of the fused runs against the 95% χ²
 //     bounds of an average over that many Monte Carlo runs.
 //  3. Speed: time per EKF update (association + update) with 100, 300 and 1000 map features, and
@@ -26,6 +27,7 @@
 #include "io/tum.hpp"
 #include "sim/simulator.hpp"
 #include "slam/feature_slam_estimator.hpp"
+#include "slam/psm_slam_estimator.hpp"
 
 using namespace polarslam;
 
@@ -53,9 +55,15 @@ struct TimedEstimator {
   double seconds = 0.0;
 };
 
+/// PSM SLAM (laser and odometry only) on the same data, for the side-by-side ATE.
+struct TimedPsmSlam {
+  PsmSlamEstimator estimator;
+  double seconds = 0.0;
+};
+
 class Fanout : public SimSink {
  public:
-  explicit Fanout(std::vector<TimedEstimator>& estimators) : estimators_(estimators) {}
+  Fanout(std::vector<TimedEstimator>& estimators, TimedPsmSlam& psm) : estimators_(estimators), psm_(psm) {}
   void onLaser(const LaserScan& scan) override {
     each([&](Estimator& e) { e.onLaser(scan); });
   }
@@ -76,8 +84,12 @@ class Fanout : public SimSink {
       call(*t.estimator);
       t.seconds += std::chrono::duration<double>(Clock::now() - start).count();
     }
+    const auto start = Clock::now();
+    call(psm_.estimator);
+    psm_.seconds += std::chrono::duration<double>(Clock::now() - start).count();
   }
   std::vector<TimedEstimator>& estimators_;
+  TimedPsmSlam& psm_;
 };
 
 struct RunResult {
@@ -154,14 +166,16 @@ void runClaim(const Options& o, const std::string& world_path) {
   int fused_wins = 0;
   std::printf("\n=== world %s, robot %s, %d seeds from %llu\n", world_path.c_str(), o.robot.c_str(), o.seeds,
               static_cast<unsigned long long>(o.first_seed));
-  std::printf("%6s %8s | %-28s | %-28s | %-28s\n", "seed", "seconds", "laser: ATE max map loop", "sonar: ATE max map loop",
-              "fused: ATE max map loop");
+  std::printf("%6s %8s | %-28s | %-28s | %-28s | %-13s\n", "seed", "seconds", "laser: ATE max map loop",
+              "sonar: ATE max map loop", "fused: ATE max map loop", "psm-slam: ATE max");
+  std::vector<double> psm_ate, psm_max, psm_speed;
   for (int k = 0; k < o.seeds; ++k) {
     const uint64_t seed = o.first_seed + static_cast<uint64_t>(k);
     std::vector<TimedEstimator> estimators;
     for (SlamSensors s : configs)
       estimators.push_back({s, std::make_unique<FeatureSlamEstimator>(configForRobot(robot, s)), 0.0});
-    Fanout sink(estimators);
+    TimedPsmSlam psm;
+    Fanout sink(estimators, psm);
     Simulator sim(world, robot, seed);
     const double limit = o.seconds > 0 ? o.seconds : 3600.0;
     while (sim.time() < limit && !sim.finished()) sim.step(sink);
@@ -190,6 +204,19 @@ void runClaim(const Options& o, const std::string& world_path) {
       std::printf(" %6.3f %6.3f %4zu %-3s %s |", r.ate_rmse, r.max_error, r.map_size, r.loop_closed ? "yes" : "no",
                   r.success ? "ok  " : "FAIL");
     }
+    {
+      const auto start = Clock::now();
+      nlohmann::json report;
+      const std::string dir = !o.out.empty() && k == 0 ? (std::filesystem::path(o.out) / world.name / "psm-slam").string() : "";
+      psm.estimator.finish(dir, report);
+      psm.seconds += std::chrono::duration<double>(Clock::now() - start).count();
+      if (!dir.empty()) writeTumTrajectory(dir + "/trajectory.tum", psm.estimator.trajectory());
+      const AteResult ate = evaluateAte(psm.estimator.trajectory(), truth);
+      psm_ate.push_back(ate.raw_translation.rmse);
+      psm_max.push_back(ate.raw_translation.max);
+      psm_speed.push_back(psm.seconds > 0 ? sim.time() / psm.seconds : 0.0);
+      std::printf(" %6.3f %6.3f |", psm_ate.back(), psm_max.back());
+    }
     const bool win = success[SlamSensors::Fused] && (!success[SlamSensors::Laser] || !success[SlamSensors::Sonar]);
     fused_wins += win;
     std::printf("%s\n", win ? " fused succeeds where a single sensor fails" : "");
@@ -214,6 +241,9 @@ void runClaim(const Options& o, const std::string& world_path) {
                 mean(max_error), *std::max_element(max_error.begin(), max_error.end()), mean(map_size), ok, runs.size(),
                 mean(speed));
   }
+  std::printf("%-7s %10.3f %10.3f %10.3f %10.3f %10s %10s %10.1f   (PSM SLAM, laser + odometry, same runs)\n",
+              "psm", mean(psm_ate), median(psm_ate), mean(psm_max), *std::max_element(psm_max.begin(), psm_max.end()),
+              "-", "-", mean(psm_speed));
   std::printf("fused succeeds where laser-only or sonar-only fails: %d of %d seeds\n", fused_wins, o.seeds);
 
   // Consistency of the fused filter: NEES averaged over the runs at each second.
