@@ -45,6 +45,7 @@ struct Options {
   double max_error_limit = 0.5;   ///< m: a run whose position error ever exceeds this failed
   std::string out;
   std::string nees_trace;  ///< CSV of per-second NEES of every configuration (first seed)
+  std::string psm_config;  ///< PSM SLAM parameters (YAML), default parameters when empty
   bool claim = true, speed = true;
 };
 
@@ -174,7 +175,8 @@ void runClaim(const Options& o, const std::string& world_path) {
     std::vector<TimedEstimator> estimators;
     for (SlamSensors s : configs)
       estimators.push_back({s, std::make_unique<FeatureSlamEstimator>(configForRobot(robot, s)), 0.0});
-    TimedPsmSlam psm;
+    TimedPsmSlam psm{PsmSlamEstimator(o.psm_config.empty() ? PsmSlamEstimatorConfig{}
+                                                           : loadPsmSlamEstimatorConfig(o.psm_config))};
     Fanout sink(estimators, psm);
     Simulator sim(world, robot, seed);
     const double limit = o.seconds > 0 ? o.seconds : 3600.0;
@@ -333,6 +335,7 @@ int main(int argc, char** argv) {
   app.add_option("--seconds", o.seconds, "simulated seconds per run (0 = until the path ends)")->capture_default_str();
   app.add_option("--max-error", o.max_error_limit, "m: a run whose error ever exceeds this failed")->capture_default_str();
   app.add_option("--out", o.out, "write map.json and trajectory.tum of the first seed per configuration here");
+  app.add_option("--psm-config", o.psm_config, "PSM SLAM parameters (YAML)")->check(CLI::ExistingFile);
   app.add_option("--nees-trace", o.nees_trace, "write PREFIX.<sensors>.csv: per-second NEES of the first seed");
   app.add_flag("--speed-only", speed_only, "only the update timing");
   app.add_flag("--no-speed", no_speed, "skip the update timing");
