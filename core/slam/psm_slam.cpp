@@ -121,6 +121,7 @@ std::optional<PsmSlam::Observation> PsmSlam::matchKeyframe(const Keyframe& keyfr
   const double saved_window = matcher_.params().initial_search_window;
   if (loop_candidate) matcher_.params().initial_search_window = params_.loop_search_window;
   std::optional<Observation> best;
+  std::vector<Observation> converged;
   for (const Pose2& guess : guesses) {
     const Pose2 laser_guess = laserPoseInReferenceLaser(Pose2(), guess, keyframe.laser_mount, mount);
     const MatchResult m = matcher_.match(keyframe.scan, scan, laser_guess, params_.method);
@@ -133,8 +134,16 @@ std::optional<PsmSlam::Observation> PsmSlam::matchKeyframe(const Keyframe& keyfr
     o.error_index = m.error_index;
     o.overlap = static_cast<double>(m.valid_points) / std::max(1, std::min(keyframe.scan.valid_count, scan.valid_count));
     if (!best || o.error_index < best->error_index) best = o;
+    converged.push_back(o);
   }
   matcher_.params().initial_search_window = saved_window;
+  if (best) {
+    for (const Observation& o : converged)
+      if (between(best->z, o.z).translation().norm() > params_.loop_ambiguity_distance &&
+          std::abs(wrapAngle(o.z.theta - best->z.theta)) <= params_.loop_ambiguity_heading &&
+          o.error_index <= params_.loop_ambiguity_ratio * best->error_index)
+        best->ambiguous = true;
+  }
   return best;
 }
 
@@ -280,6 +289,10 @@ bool PsmSlam::selectReference(const LaserScan& scan, PreparedScan& prepared, con
     std::optional<Observation> o = matchKeyframe(keyframe(c.id), prepared, scan.laser_pose, c.prediction, c.old, wide);
     if (!o || !goodMatch(*o, c.old)) {
       if (c.old) ++(o ? stats_.loop_poor_matches : stats_.loop_failed_matches);
+      continue;
+    }
+    if (o->ambiguous) {
+      ++stats_.loop_ambiguous;
       continue;
     }
     if (!c.old) {

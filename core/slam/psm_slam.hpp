@@ -57,6 +57,7 @@ struct PsmSlamStats {
   size_t loop_closures = 0;        ///< accepted matches with old reference scans
   size_t loop_failed_matches = 0;  ///< old candidates PSM did not converge on
   size_t loop_poor_matches = 0;    ///< ... converged, but error index or overlap too poor
+  size_t loop_ambiguous = 0;       ///< ... good, but another start in the prior found an equally good place
   size_t loop_gate_rejections = 0; ///< ... good, but outside the χ² gate of the prediction
   size_t loop_unconfirmed = 0;     ///< ... good, but a wide prior and no second closure agreeing (yet)
   size_t optimizations = 0;
@@ -115,6 +116,7 @@ class PsmSlam {
     Mat3 R = Mat3::Zero();
     double overlap = 0.0;
     double error_index = 0.0;
+    bool ambiguous = false;   ///< a distinct pose matched about as well (a look-alike place)
   };
   struct TrajectoryRecord {
     int64_t utime = 0;

@@ -182,6 +182,7 @@ void runClaim(const Options& o, const std::string& world_path) {
     const double limit = o.seconds > 0 ? o.seconds : 3600.0;
     while (sim.time() < limit && !sim.finished()) sim.step(sink);
     const std::vector<PoseStamped> truth = inStartFrame(sink.truth);
+    if (std::getenv("PSM_DEBUG")) writeTumTrajectory("/tmp/prof/truth.tum", sink.truth);
     std::printf("%6llu %8.1f |", static_cast<unsigned long long>(seed), sim.time());
     std::map<SlamSensors, bool> success;
     for (TimedEstimator& t : estimators) {
