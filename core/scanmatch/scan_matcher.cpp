@@ -389,14 +389,18 @@ bool iterationEnds(MatchResult& result, StopRule& stop, double max_range) {
 
 }  // namespace
 
-MatchResult ScanMatcher::matchPsm(const PreparedScan& ref, const PreparedScan& cur, const Pose2& guess) {
+MatchResult ScanMatcher::startResult(const PreparedScan& ref, const PreparedScan& cur, const Pose2& guess) const {
   MatchResult result;
   result.pose = guess;
   result.corridor = ref.corridor.is_corridor;
-  if (ref.valid_count < params_.min_valid_points || cur.valid_count < params_.min_valid_points) {
+  if (ref.valid_count < params_.min_valid_points || cur.valid_count < params_.min_valid_points)
     result.status = MatchStatus::NotEnoughPoints;
-    return result;
-  }
+  return result;
+}
+
+MatchResult ScanMatcher::matchPsm(const PreparedScan& ref, const PreparedScan& cur, const Pose2& guess) {
+  MatchResult result = startResult(ref, cur, guess);
+  if (!result.ok()) return result;
   StopRule stop(params_.stop_translation, params_.stop_rotation, params_.stop_count);
   bool first_orientation = true, joint = false, translated = false, rotated = false;
   double last_translation = kInf, last_rotation = kInf;
@@ -477,13 +481,8 @@ ScanMatcher::CartesianStep ScanMatcher::solveCartesian(const PreparedScan& ref, 
 }
 
 MatchResult ScanMatcher::matchPsmC(const PreparedScan& ref, const PreparedScan& cur, const Pose2& guess) {
-  MatchResult result;
-  result.pose = guess;
-  result.corridor = ref.corridor.is_corridor;
-  if (ref.valid_count < params_.min_valid_points || cur.valid_count < params_.min_valid_points) {
-    result.status = MatchStatus::NotEnoughPoints;
-    return result;
-  }
+  MatchResult result = startResult(ref, cur, guess);
+  if (!result.ok()) return result;
   StopRule stop(params_.stop_translation, params_.stop_rotation, params_.stop_count);
   const int period = std::max(2, params_.psmc_orientation_period);
   // v0.1 searches orientation at iteration ≡ 3 (mod 4); with orientation first it is ≡ 0.
@@ -520,13 +519,8 @@ MatchResult ScanMatcher::matchPsmC(const PreparedScan& ref, const PreparedScan& 
 // ICP baseline (§12)
 
 MatchResult ScanMatcher::matchIcp(const PreparedScan& ref, const PreparedScan& cur, const Pose2& guess) {
-  MatchResult result;
-  result.pose = guess;
-  result.corridor = ref.corridor.is_corridor;
-  if (ref.valid_count < params_.min_valid_points || cur.valid_count < params_.min_valid_points) {
-    result.status = MatchStatus::NotEnoughPoints;
-    return result;
-  }
+  MatchResult result = startResult(ref, cur, guess);
+  if (!result.ok()) return result;
   const BeamGeometry& g = *ref.geometry;
   const auto n = static_cast<long>(ref.size());
   const long window = std::max(1L, std::lround(params_.search_window / g.angle_increment));

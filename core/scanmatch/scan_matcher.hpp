@@ -83,7 +83,10 @@ class ScanMatcher {
     int used = 0;
   };
 
+  /// The result every method starts from: the guess, or NotEnoughPoints for a scan too sparse.
+  MatchResult startResult(const PreparedScan& ref, const PreparedScan& cur, const Pose2& guess) const;
   bool usableSample(const PreparedScan& ref, size_t j) const;
+
   double weightingFactor(int iteration) const;
   TranslationStep solveTranslation(const PreparedScan& ref, const Pose2& pose, double c);
   JointSystem jointSystem(const PreparedScan& ref, const Pose2& pose, double c) const;
