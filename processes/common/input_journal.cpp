@@ -1,5 +1,7 @@
 #include "common/input_journal.hpp"
 
+#include <CLI/CLI.hpp>
+
 #include <filesystem>
 #include <stdexcept>
 #include <system_error>

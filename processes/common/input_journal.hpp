@@ -5,7 +5,6 @@
 // listens again, so it resumes with the state it had — the same state, because the core is
 // deterministic — and a final map still covers the whole run. Messages that arrived while it
 // was down are the only loss.
-#include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
 
 #include <chrono>
@@ -15,6 +14,10 @@
 #include <vector>
 
 #include "common/lcm_log.hpp"
+
+namespace CLI {
+class App;
+}  // namespace CLI
 
 namespace polarslam {
 

@@ -1,5 +1,7 @@
 #include "common/laser_feature_options.hpp"
 
+#include <CLI/CLI.hpp>
+
 namespace polarslam {
 
 void LaserFeatureOptions::add(CLI::App& app) {

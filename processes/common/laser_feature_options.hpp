@@ -1,12 +1,15 @@
 #pragma once
 // Command-line options of the laser feature extractor, shared by polarslam-features and
 // `polarslam features`: a YAML file (robot file or config/laser-features.yaml) plus overrides.
-#include <CLI/CLI.hpp>
 
 #include <optional>
 #include <string>
 
 #include "laser/laser_feature_extractor.hpp"
+
+namespace CLI {
+class App;
+}  // namespace CLI
 
 namespace polarslam {
 
