@@ -22,8 +22,7 @@ struct LineParser {
     const auto n = static_cast<size_t>(in.count("beam count", static_cast<int64_t>(kMaxLaserBeams)));
     in.expectTotal(n + 11, "n + 11");
     LaserScan scan;
-    scan.ranges.resize(n);
-    for (size_t i = 0; i < n; ++i) scan.ranges[i] = in.range(i);
+    scan.ranges = in.ranges(n);
     in.skip(3);  // the laser pose triple: corrected or not depending on the log; the odometry is next
     OdometryReading odo;
     odo.pose.x = in.finite("odom_x");
@@ -54,8 +53,7 @@ struct LineParser {
     in.skip(2);  // accuracy, remission mode
     const auto n = static_cast<size_t>(in.count("beam count", static_cast<int64_t>(kMaxLaserBeams)));
     if (fields.size() < n + 10) in.fail("line ends inside the ranges");
-    scan.ranges.resize(n);
-    for (size_t i = 0; i < n; ++i) scan.ranges[i] = in.range(i);
+    scan.ranges = in.ranges(n);
     const auto n_rem = static_cast<size_t>(in.count("remission count", static_cast<int64_t>(kMaxLaserBeams)));
     in.expectTotal(24 + n + n_rem, "24 + n + n_remissions");
     in.skip(n_rem);

@@ -43,8 +43,7 @@ CarmenLog readDukeLog(std::istream& in, const DukeOptions& options) {
       const auto n = static_cast<size_t>(c.count("beam count", static_cast<int64_t>(kMaxLaserBeams)));
       c.expectTotal(n + 2, "n + 2");
       LaserScan scan;
-      scan.ranges.resize(n);
-      for (size_t i = 0; i < n; ++i) scan.ranges[i] = c.range(i);
+      scan.ranges = c.ranges(n);
       const FlaserGeometry geometry = flaserGeometry(n);
       if (!geometry.usual) ++log.unusual_beam_counts;
       scan.utime = slot * period_us;

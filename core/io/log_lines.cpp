@@ -60,6 +60,12 @@ float FieldCursor::range(size_t index) {
   return static_cast<float>(v);
 }
 
+std::vector<float> FieldCursor::ranges(size_t n) {
+  std::vector<float> values(n);
+  for (size_t i = 0; i < n; ++i) values[i] = range(i);
+  return values;
+}
+
 int64_t FieldCursor::integer(const char* what, int64_t min, int64_t max) {
   const std::string_view f = take(what);
   int64_t n = 0;

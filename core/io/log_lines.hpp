@@ -37,6 +37,8 @@ class FieldCursor {
   double finite(const char* what);
   /// A range reading: any number (NaN/inf become "no return" downstream).
   float range(size_t index);
+  /// The next n range readings.
+  std::vector<float> ranges(size_t n);
   /// An integer in [min, max].
   int64_t integer(const char* what, int64_t min, int64_t max);
   int64_t count(const char* what, int64_t max) { return integer(what, 0, max); }
