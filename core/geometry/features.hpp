@@ -49,6 +49,8 @@ struct FeatureSet {
   std::vector<CornerFeature> corners;
   std::vector<PointFeature> points;
   int num_rejected = 0;
+  /// Laser sets: sonar break-hint bearings (rad, laser frame) the segmenter used.
+  std::vector<double> break_hints;
 };
 
 struct PoseStamped {

@@ -2,67 +2,33 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iterator>
 
 namespace polarslam {
 
 AnchoredScanStore::AnchoredScanStore(ScanStoreOptions options)
-    : options_(options), min_translation_(options.min_translation), min_rotation_(options.min_rotation) {
+    : options_(options),
+      min_translation_(options.min_translation),
+      min_rotation_(options.min_rotation),
+      pending_(options.max_pending) {
   options_.capacity = std::max<size_t>(options_.capacity, 2);
 }
 
 void AnchoredScanStore::addScan(LaserScan scan) {
   ++stats_.scans_received;
-  const auto anchors = pending_anchors_.find(scan.utime);
-  if (anchors != pending_anchors_.end()) {
-    ScanAnchors a = std::move(anchors->second);
-    pending_anchors_.erase(anchors);
-    dropPendingBefore(scan.utime);
-    admit(std::move(scan), std::move(a));
-    return;
-  }
-  const int64_t utime = scan.utime;
-  pending_scans_[utime] = std::move(scan);
-  boundQueue(pending_scans_);
+  if (auto pair = pending_.addScan(std::move(scan))) admit(std::move(pair->first), std::move(pair->second));
+  stats_.unpaired_dropped = pending_.unpairedDropped();
 }
 
 void AnchoredScanStore::addAnchors(ScanAnchors anchors) {
   ++stats_.anchors_received;
-  const auto scan = pending_scans_.find(anchors.utime);
-  if (scan != pending_scans_.end()) {
-    LaserScan s = std::move(scan->second);
-    pending_scans_.erase(scan);
-    dropPendingBefore(anchors.utime);
-    admit(std::move(s), std::move(anchors));
-    return;
-  }
-  const int64_t utime = anchors.utime;
-  pending_anchors_[utime] = std::move(anchors);
-  boundQueue(pending_anchors_);
+  if (auto pair = pending_.addTag(std::move(anchors))) admit(std::move(pair->first), std::move(pair->second));
+  stats_.unpaired_dropped = pending_.unpairedDropped();
 }
 
 void AnchoredScanStore::add(LaserScan scan, ScanAnchors anchors) {
   ++stats_.scans_received;
   ++stats_.anchors_received;
   admit(std::move(scan), std::move(anchors));
-}
-
-void AnchoredScanStore::dropPendingBefore(int64_t utime) {
-  auto dropBefore = [&](auto& queue) {
-    const auto end = queue.lower_bound(utime);
-    stats_.unpaired_dropped += std::distance(queue.begin(), end);
-    queue.erase(queue.begin(), end);
-  };
-  dropBefore(pending_scans_);
-  dropBefore(pending_anchors_);
-}
-
-template <typename Queue>
-void AnchoredScanStore::boundQueue(Queue& queue) {
-  while (queue.size() > options_.max_pending) {
-    queue.erase(queue.begin());
-    ++stats_.unpaired_dropped;
-  }
 }
 
 bool AnchoredScanStore::farEnoughFromLast(const Pose2& pose) const {
@@ -107,8 +73,8 @@ size_t AnchoredScanStore::memoryBytes() const {
   };
   size_t bytes = 0;
   for (const auto& s : scans_) bytes += scanBytes(s.scan) + anchorBytes(s.anchors);
-  for (const auto& [t, s] : pending_scans_) bytes += scanBytes(s);
-  for (const auto& [t, a] : pending_anchors_) bytes += anchorBytes(a);
+  for (const auto& [t, s] : pending_.scans()) bytes += scanBytes(s);
+  for (const auto& [t, a] : pending_.tags()) bytes += anchorBytes(a);
   return bytes;
 }
 

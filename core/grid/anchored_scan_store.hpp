@@ -12,9 +12,9 @@
 // unpaired entries older than t are dropped (the EKF anchors scans in time order).
 #include <cstddef>
 #include <cstdint>
-#include <map>
 #include <vector>
 
+#include "grid/scan_pairing.hpp"
 #include "laser/laser_scan.hpp"
 #include "slam/feature_map.hpp"
 
@@ -64,16 +64,11 @@ class AnchoredScanStore {
   void admit(LaserScan scan, ScanAnchors anchors);
   bool farEnoughFromLast(const Pose2& pose) const;
   void thin();
-  /// Anchors come in time order: once utime t is paired, older unpaired entries never will be.
-  void dropPendingBefore(int64_t utime);
-  template <typename Queue>
-  void boundQueue(Queue& queue);
 
   ScanStoreOptions options_;
   double min_translation_, min_rotation_;
   std::vector<AnchoredScan> scans_;
-  std::map<int64_t, LaserScan> pending_scans_;
-  std::map<int64_t, ScanAnchors> pending_anchors_;
+  ScanPairing<ScanAnchors> pending_;
   ScanStoreStatistics stats_;
   uint64_t version_ = 0;
 };

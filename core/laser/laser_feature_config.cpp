@@ -41,7 +41,9 @@ void readSegmentation(const YamlFields& y, const YAML::Node& node, const std::st
   s.corner_tolerance = deg2rad(y.number(node, "corner_tolerance_deg", ctx, rad2deg(s.corner_tolerance), 0.0, 45.0));
 }
 
-void readFeatureSection(const YamlFields& y, const YAML::Node& node, LaserFeatureConfig& c) {
+}  // namespace
+
+void readLaserFeatureSection(const YamlFields& y, const YAML::Node& node, LaserFeatureConfig& c) {
   const std::string ctx = "laser_features";
   y.requireMap(node, ctx,
                {"errors", "tilt_deg", "tilt_axis_deg", "yaw_error_deg", "systematic_scale", "max_incidence_deg",
@@ -69,8 +71,6 @@ void readFeatureSection(const YamlFields& y, const YAML::Node& node, LaserFeatur
   if (y.has(node, "segmentation")) readSegmentation(y, node["segmentation"], ctx + ".segmentation", c.segmentation);
 }
 
-}  // namespace
-
 LaserFeatureConfig loadLaserFeatureConfig(const std::string& path) {
   const YamlFields y(path);
   const YAML::Node& root = y.root();
@@ -85,7 +85,7 @@ LaserFeatureConfig loadLaserFeatureConfig(const std::string& path) {
     c.errors.tilt = deg2rad(y.number(laser, "tilt_deg", "laser", 0.0, -45.0, 45.0));
     c.errors.tilt_axis = deg2rad(y.number(laser, "tilt_axis_deg", "laser", 0.0, -360.0, 360.0));
   }
-  if (y.has(root, "laser_features")) readFeatureSection(y, root["laser_features"], c);
+  if (y.has(root, "laser_features")) readLaserFeatureSection(y, root["laser_features"], c);
   return c;
 }
 

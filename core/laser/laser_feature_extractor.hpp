@@ -14,7 +14,13 @@
 #include "laser/polar_line_fit.hpp"
 #include "laser/segmentation.hpp"
 
+namespace YAML {
+class Node;
+}  // namespace YAML
+
 namespace polarslam {
+
+class YamlFields;
 
 /// A SICK LMS-like laser of which only the white noise is known: σ_n = 1 cm.
 inline LaserErrorParams defaultLaserErrors() {
@@ -52,6 +58,8 @@ struct LaserFeatureConfig {
 /// A `laser_features:` section (in either) sets segmentation and corner options and may
 /// override the error model. Throws std::runtime_error "FILE:LINE: ..." on bad input.
 LaserFeatureConfig loadLaserFeatureConfig(const std::string& path);
+/// Applies a `laser_features:` section (the keys of config/laser-features.yaml) to `config`.
+void readLaserFeatureSection(const YamlFields& yaml, const YAML::Node& section, LaserFeatureConfig& config);
 
 /// Everything the extractor computed, for diagnostics and benchmarks.
 struct ExtractionDetails {

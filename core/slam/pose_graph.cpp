@@ -236,4 +236,20 @@ PoseGraphOptimizationSummary optimizePoseGraph(PoseGraph& graph, const PoseGraph
   return summary;
 }
 
+std::vector<PoseStamped> reanchor(const std::vector<AnchoredPose>& poses, const PoseGraph& graph, size_t* missing) {
+  std::vector<PoseStamped> out;
+  out.reserve(poses.size());
+  size_t unknown = 0;
+  for (const AnchoredPose& p : poses) {
+    Pose2 pose = p.relative;
+    if (p.node >= 0) {
+      if (graph.indexOf(p.node) >= 0) pose = graph.node(p.node).pose * p.relative;
+      else ++unknown;
+    }
+    out.push_back({p.utime, pose, Mat3::Zero()});
+  }
+  if (missing) *missing = unknown;
+  return out;
+}
+
 }  // namespace polarslam

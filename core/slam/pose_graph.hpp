@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "geometry/features.hpp"
 #include "geometry/pose2.hpp"
 
 namespace polarslam {
@@ -56,6 +57,20 @@ class PoseGraph {
   std::vector<PoseGraphNode> nodes_;
   std::vector<PoseGraphEdge> edges_;
 };
+
+/// A robot pose stored relative to a pose-graph node (the reference scan it was matched to), so
+/// that it follows the node when the graph is optimised.
+struct AnchoredPose {
+  int64_t utime = 0;
+  int64_t node = -1;   ///< node id; -1: `relative` is already in the map frame
+  Pose2 relative;      ///< robot base pose in the node's frame
+  bool new_node = false;  ///< this scan became node `node` (a new reference scan)
+};
+
+/// node pose ⊕ relative for each pose (covariance zero). A pose whose node the graph does not
+/// hold is taken as `relative` unchanged and counted in `missing`.
+std::vector<PoseStamped> reanchor(const std::vector<AnchoredPose>& poses, const PoseGraph& graph,
+                                  size_t* missing = nullptr);
 
 /// Residual of one edge at the given node poses: v(⊖from ⊕ to) − v(measurement), angle wrapped,
 /// the vector whose covariance the edge carries and whose Mahalanobis norm the optimiser minimises.

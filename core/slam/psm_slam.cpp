@@ -482,6 +482,8 @@ void PsmSlam::record(int64_t utime, PsmSlamScanResult& result) {
   r.cov = filter_.robotCovariance();
   records_.push_back(r);
   result.pose = {utime, robot, r.cov};
+  const bool newest = !keyframes_.empty() && anchor == keyframes_.back().id;
+  result.anchor = {utime, anchor, r.relative, result.new_keyframe && newest};
   last_scan_motion_ = between(last_scan_pose_, robot);
   last_scan_pose_ = robot;
   stats_.filter_flushes = filter_.flushCount();

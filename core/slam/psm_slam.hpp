@@ -72,6 +72,7 @@ struct PsmSlamStats {
 /// What one scan did.
 struct PsmSlamScanResult {
   PoseStamped pose;            ///< robot pose in the map frame after this scan
+  AnchoredPose anchor;         ///< the same pose relative to its reference scan (graph node)
   bool usable = false;
   bool tracked = false;
   bool held = false;

@@ -336,9 +336,8 @@ void FeatureFusion::emitLaser(const FeatureSet& laser, const std::vector<SonarSc
   }
   if (params_.laser_aided_selection) {
     const LaserScan* raw = rawScanAt(laser.utime);
-    const auto hints = issued_hints_.find(laser.utime);
-    const LaserEvidence evidence = makeLaserEvidence(
-        raw, laser, sonar_base, hints == issued_hints_.end() ? std::vector<double>{} : hints->second);
+    // Segment ends the segmenter made at a sonar hint are no laser support for that target.
+    const LaserEvidence evidence = makeLaserEvidence(raw, laser, sonar_base, laser.break_hints);
     sonar_base = selectSonarFeatures(sonar_base, evidence, params_.selection, &stats_.selection);
   }
   emit(fuseFeatureSets(laser_base, sonar_base, params_.fusion, &stats_.fusion));
@@ -369,26 +368,6 @@ const LaserScan* FeatureFusion::rawScanAt(int64_t utime) const {
   for (const LaserScan& s : raw_scans_)
     if (s.utime == utime) return &s;
   return nullptr;
-}
-
-std::vector<BreakHint> FeatureFusion::breakHints(const LaserScan& scan) {
-  FeatureSet sonar_base;
-  for (const auto& [id, latest] : latest_sonar_) {
-    if (std::llabs(latest.utime - scan.utime) > seconds(params_.laser_wait_s)) continue;
-    FeatureSet f = sonarFeatures(latest, params_.sonar);
-    if (latest.utime != scan.utime) {
-      const auto motion = odometry_.motion(scan.utime, latest.utime);
-      if (!motion) continue;
-      f = transformFeatures(f, motion->delta, motion->cov);
-    }
-    sonar_base.corners.insert(sonar_base.corners.end(), f.corners.begin(), f.corners.end());
-    sonar_base.points.insert(sonar_base.points.end(), f.points.begin(), f.points.end());
-  }
-  std::vector<BreakHint> hints = sonarBreakHints(sonar_base, scan.laser_pose);
-  std::vector<double>& issued = issued_hints_[scan.utime];
-  for (const BreakHint& h : hints) issued.push_back(h.bearing);
-  while (issued_hints_.size() > 20) issued_hints_.erase(issued_hints_.begin());
-  return hints;
 }
 
 }  // namespace polarslam

@@ -104,11 +104,6 @@ class FeatureFusion {
   /// Emits everything still pending (end of a log).
   void flush();
 
-  /// Break hints for the laser segmenter from the latest sonar cycle of each array, moved to the
-  /// scan's time and into its laser frame. They are remembered: laser segment ends at a hint do
-  /// not count as laser support for a sonar point (that would be circular).
-  std::vector<BreakHint> breakHints(const LaserScan& scan);
-
   const FeatureFusionStats& stats() const { return stats_; }
   const FeatureFusionParams& params() const { return params_; }
 
@@ -129,7 +124,6 @@ class FeatureFusion {
   std::deque<SonarScan> pending_sonar_;
   std::deque<LaserScan> raw_scans_;  ///< normalised
   std::map<int, SonarScan> latest_sonar_;
-  std::map<int64_t, std::vector<double>> issued_hints_;  ///< laser scan utime → hint bearings
   std::vector<FeatureSet> ready_;
   int64_t stream_time_ = std::numeric_limits<int64_t>::min();
   int64_t emitted_until_ = std::numeric_limits<int64_t>::min();

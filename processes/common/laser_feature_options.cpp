@@ -6,7 +6,8 @@ namespace polarslam {
 
 void LaserFeatureOptions::add(CLI::App& app) {
   app.add_option("--config", config_,
-                 "YAML: a robot file (its laser error model) or config/laser-features.yaml (see core/laser/README.md)")
+                 "YAML: a robot file (its laser error model), config/laser-features.yaml, or an EKF pipeline "
+                 "file such as config/ekf.yaml (its laser_features section)")
       ->check(CLI::ExistingFile);
   app.add_option("--noise-sigma", noise_sigma_, "m, white range noise sigma_n (default 0.01)");
   app.add_option("--quantum", quantum_, "m, range quantisation step q_r (0 = none)");
@@ -23,6 +24,17 @@ void LaserFeatureOptions::add(CLI::App& app) {
 
 LaserFeatureConfig LaserFeatureOptions::resolve() const {
   LaserFeatureConfig c = config_.empty() ? LaserFeatureConfig{} : loadLaserFeatureConfig(config_);
+  applyOverrides(c);
+  return c;
+}
+
+FeaturePipelineConfig LaserFeatureOptions::resolvePipeline(SlamSensors sensors) const {
+  FeaturePipelineConfig c = loadFeaturePipelineConfig(config_, sensors);
+  applyOverrides(c.laser);
+  return c;
+}
+
+void LaserFeatureOptions::applyOverrides(LaserFeatureConfig& c) const {
   LaserErrorParams& e = c.errors;
   auto set = [](const std::optional<double>& option, double& target, double scale = 1.0) {
     if (option) target = *option * scale;
@@ -40,7 +52,6 @@ LaserFeatureConfig LaserFeatureOptions::resolve() const {
   for (double v : {e.range.noise_sigma, e.range.quantum, e.range.scan_bias_sigma, e.systematic_scale})
     if (!(v >= 0.0) || !std::isfinite(v)) throw std::runtime_error("error-model options must be finite and >= 0");
   if (no_corners_) c.corners = false;
-  return c;
 }
 
 }  // namespace polarslam

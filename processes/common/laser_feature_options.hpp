@@ -1,11 +1,13 @@
 #pragma once
 // Command-line options of the laser feature extractor, shared by polarslam-features and
-// `polarslam features`: a YAML file (robot file or config/laser-features.yaml) plus overrides.
+// `polarslam features`: a YAML file (robot file, config/laser-features.yaml or an EKF pipeline
+// file) plus overrides.
 
 #include <optional>
 #include <string>
 
 #include "laser/laser_feature_extractor.hpp"
+#include "pipeline/feature_pipeline.hpp"
 
 namespace CLI {
 class App;
@@ -19,8 +21,13 @@ class LaserFeatureOptions {
   void add(CLI::App& app);
   /// The configuration: the YAML file (if any), then every override given on the command line.
   LaserFeatureConfig resolve() const;
+  /// The EKF pipeline's configuration from the same file (polarslam-features), overrides applied
+  /// to its laser feature part.
+  FeaturePipelineConfig resolvePipeline(SlamSensors sensors) const;
 
  private:
+  void applyOverrides(LaserFeatureConfig& config) const;
+
   std::string config_;
   std::optional<double> noise_sigma_, quantum_, scan_bias_sigma_, fixed_bias_, growth_, incidence_, tilt_deg_,
       tilt_axis_deg_, yaw_error_deg_, systematic_scale_;

@@ -196,13 +196,18 @@ polarslam::features_t toLcm(const FeatureSet& f) {
   msg.num_corners = static_cast<int32_t>(msg.corners.size());
   msg.num_points = static_cast<int32_t>(msg.points.size());
   msg.num_rejected = f.num_rejected;
+  msg.break_hints = f.break_hints;
+  msg.num_break_hints = static_cast<int32_t>(msg.break_hints.size());
   return msg;
 }
 
 std::string fromLcm(const polarslam::features_t& msg, FeatureSet& out) {
   if (!countMatches(msg.lines, msg.num_lines) || !countMatches(msg.corners, msg.num_corners) ||
-      !countMatches(msg.points, msg.num_points))
+      !countMatches(msg.points, msg.num_points) || !countMatches(msg.break_hints, msg.num_break_hints))
     return "features: counts disagree with arrays";
+  if (msg.break_hints.size() > 5000) return "features: too many break hints";
+  for (double h : msg.break_hints)
+    if (!std::isfinite(h)) return "features: non-finite break hint";
   if (msg.lines.size() + msg.corners.size() + msg.points.size() > 5000) return "features: too many features";
   out = FeatureSet{};
   out.utime = msg.utime;
@@ -210,6 +215,7 @@ std::string fromLcm(const polarslam::features_t& msg, FeatureSet& out) {
   out.frame = msg.frame;
   out.sensor_pose = poseFrom(msg.sensor_pose);
   out.num_rejected = msg.num_rejected;
+  out.break_hints = msg.break_hints;
   auto sourceOf = [](int8_t s) { return static_cast<FeatureSource>(s < 0 || s > 2 ? 0 : s); };
   for (const auto& m : msg.lines) {
     if (!finite({m.alpha, m.d}) || !finiteMatrix<2>(m.cov)) return "features: non-finite line";

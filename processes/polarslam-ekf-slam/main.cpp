@@ -1,6 +1,8 @@
 // polarslam-ekf-slam: ODOMETRY + FEATURES → SLAM_POSE (pose_t), SLAM_MAP (slam_map_t) and
 // SCAN_ANCHORS (scan_anchors_t, one per LASER scan) — EKF feature SLAM of thesis §3.5–§3.7.
-// All the work is core/slam/feature_slam.hpp; this only moves messages. LASER is read for its
+// All the work is core/slam/feature_slam.hpp, the last stage of the EKF pipeline
+// (core/pipeline/feature_pipeline.hpp); this only moves messages. On exit it publishes its final
+// SLAM_MAP: with the SCAN_ANCHORS it gives every scan's final pose (pose regeneration). LASER is read for its
 // time stamps only: each scan gets the anchors the grid process regenerates its pose from.
 #include <CLI/CLI.hpp>
 
@@ -9,7 +11,7 @@
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
 #include "slam/feature_slam.hpp"
-#include "slam/feature_slam_estimator.hpp"
+#include "pipeline/feature_pipeline.hpp"
 
 using namespace polarslam;
 
@@ -19,7 +21,7 @@ int main(int argc, char** argv) {
   std::string odometry_channel = "ODOMETRY", features_channel = "FEATURES", laser_channel = "LASER",
               pose_channel = "SLAM_POSE", map_channel = "SLAM_MAP", anchors_channel = "SCAN_ANCHORS";
   double map_period = 1.0;
-  app.add_option("--config", config, "robot file or estimator file (see core/slam/feature_slam_estimator.hpp)")
+  app.add_option("--config", config, "robot file or estimator file (see core/pipeline/feature_slam_estimator.hpp)")
       ->check(CLI::ExistingFile);
   app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
   app.add_option("--odometry-channel", odometry_channel)->capture_default_str();
@@ -35,8 +37,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    const FeatureSlamConfig cfg =
-        config.empty() ? configForRobot(SimConfig{}, SlamSensors::Fused) : loadFeatureSlamConfig(config, SlamSensors::Fused);
+    const FeaturePipelineConfig cfg = loadFeaturePipelineConfig(config, SlamSensors::Fused);
     ProcessContext context("polarslam-ekf-slam", url);
     context.enableJournal(journal);
     FeatureSlam slam(cfg.slam);

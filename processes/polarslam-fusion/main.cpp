@@ -1,14 +1,15 @@
 // polarslam-fusion: LASER_FEATURES + SONAR (+ LASER for laser-aided sonar selection, + ODOMETRY to
 // move sonar cycles to the laser scan's time) → FEATURES in the robot base frame (thesis §3.3).
-// All the work is core/sonar/feature_fusion.hpp; this only moves messages.
+// All the work is core/sonar/feature_fusion.hpp, the fusion stage of the EKF pipeline
+// (core/pipeline/feature_pipeline.hpp); this only moves messages. --config: the same file as the
+// other stages.
 #include <CLI/CLI.hpp>
 
 #include <iostream>
 
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
-#include "sim/sim_config.hpp"
-#include "slam/feature_slam_estimator.hpp"
+#include "pipeline/feature_pipeline.hpp"
 #include "sonar/feature_fusion.hpp"
 
 using namespace polarslam;
@@ -18,7 +19,7 @@ int main(int argc, char** argv) {
   std::string url, config, sensors = "fused";
   std::string laser_features_channel = "LASER_FEATURES", sonar_channel = "SONAR", laser_channel = "LASER",
               odometry_channel = "ODOMETRY", out_channel = "FEATURES";
-  app.add_option("--config", config, "robot file or estimator file (see core/slam/feature_slam_estimator.hpp)")
+  app.add_option("--config", config, "robot file or estimator file (see core/pipeline/feature_slam_estimator.hpp)")
       ->check(CLI::ExistingFile);
   app.add_option("--sensors", sensors, "laser | sonar | fused")->check(CLI::IsMember({"laser", "sonar", "fused"}))
       ->capture_default_str();
@@ -32,7 +33,7 @@ int main(int argc, char** argv) {
 
   try {
     const SlamSensors which = parseSlamSensors(sensors);
-    const FeatureSlamConfig cfg = config.empty() ? configForRobot(SimConfig{}, which) : loadFeatureSlamConfig(config, which);
+    const FeaturePipelineConfig cfg = loadFeaturePipelineConfig(config, which);
     ProcessContext context("polarslam-fusion", url);
     FeatureFusion fusion(cfg.fusion);
     int64_t out_seq = 0;

@@ -1,7 +1,9 @@
 // polarslam-psm-slam: SLAM with polar scan matching. LASER + ODOMETRY → PSM_SLAM_POSE (pose_t,
-// frame "map", one per scan, with covariance) and PSM_SLAM_GRAPH (pose_graph_t, when the graph
-// has changed, at most every --graph-period seconds, and once more on exit). A thin shell over
-// core/slam/psm_slam.hpp, the class `polarslam run --pipeline psm-slam` runs.
+// frame "map", one per scan, with covariance), PSM_SLAM_ANCHORS (anchored_pose_t, the same pose
+// relative to its reference scan) and PSM_SLAM_GRAPH (pose_graph_t: after every optimisation,
+// when the graph has otherwise changed at most every --graph-period seconds, and once more on
+// exit after a final optimisation). A thin shell over core/slam/psm_slam.hpp, the class
+// `polarslam run --pipeline psm-slam` runs with the same --config file.
 #include <CLI/CLI.hpp>
 
 #include <chrono>
@@ -9,7 +11,8 @@
 
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
-#include "pose_graph_message.hpp"
+#include "common/pose_graph_message.hpp"
+#include "pipeline/psm_slam_estimator.hpp"
 #include "slam/psm_slam.hpp"
 
 using namespace polarslam;
@@ -17,7 +20,8 @@ using namespace polarslam;
 namespace {
 
 struct Channels {
-  std::string laser = "LASER", odometry = "ODOMETRY", pose = "PSM_SLAM_POSE", graph = "PSM_SLAM_GRAPH";
+  std::string laser = "LASER", odometry = "ODOMETRY", pose = "PSM_SLAM_POSE", anchors = "PSM_SLAM_ANCHORS",
+              graph = "PSM_SLAM_GRAPH";
 };
 
 class GraphPublisher {
@@ -54,31 +58,33 @@ int main(int argc, char** argv) {
   double graph_period = 1.0;
   Channels channels;
   app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
-  app.add_option("--config", config, "PSM SLAM parameters (YAML, keys of core/slam/psm_slam_params.hpp)")
+  app.add_option("--config", config, "PSM SLAM parameters (YAML, e.g. config/psm-slam.yaml)")
       ->check(CLI::ExistingFile);
   app.add_option("--graph-period", graph_period, "s between PSM_SLAM_GRAPH messages at most")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--laser-channel", channels.laser)->capture_default_str();
   app.add_option("--odometry-channel", channels.odometry)->capture_default_str();
   app.add_option("--pose-channel", channels.pose)->capture_default_str();
+  app.add_option("--anchors-channel", channels.anchors, "poses relative to their reference scan")->capture_default_str();
   app.add_option("--graph-channel", channels.graph)->capture_default_str();
   JournalOptions journal;
   addJournalOptions(app, journal);
   CLI11_PARSE(app, argc, argv);
 
   try {
-    PsmSlam slam(config.empty() ? PsmSlamParams{} : loadPsmSlamParams(config));
+    PsmSlam slam(config.empty() ? PsmSlamParams{} : loadPsmSlamEstimatorConfig(config).slam);
     ProcessContext context("polarslam-psm-slam", url);
     context.enableJournal(journal);
     GraphPublisher graph(context, channels.graph, graph_period);
-    int64_t pose_seq = 0, last_utime = 0;
+    int64_t pose_seq = 0, anchor_seq = 0, last_utime = 0;
     context.subscribeConverted<polarslam::laser_scan_t, LaserScan>(channels.laser, [&](LaserScan& scan) {
       const PsmSlamScanResult r = slam.addScan(scan);
       if (!r.usable) context.reject("laser: too few usable readings to match");
       context.publish(channels.pose, toLcm(r.pose, "map", pose_seq++));
+      context.publish(channels.anchors, toLcm(r.anchor, anchor_seq++));
       if (r.new_keyframe || r.loop_closed || r.optimized) graph.changed();
       last_utime = scan.utime;
-      graph.publishIfDue(slam, last_utime);
+      graph.publishIfDue(slam, last_utime, r.optimized);
       context.handled();
     });
     context.subscribeConverted<polarslam::odometry_t, OdometryReading>(channels.odometry, [&](OdometryReading& reading) {

@@ -2,6 +2,7 @@
 // (each written by `polarslam run`): the figures of every report.json and every PNG plot.
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <sstream>
 
@@ -49,18 +50,36 @@ void tableRows(const nlohmann::json& node, const std::string& prefix, std::ostre
   }
 }
 
-const char* kSummaryKeys[] = {"ate_rmse_m", "max_error_m", "realtime_factor", "trajectory_poses"};
+/// report.json key and column heading. Final: after the last map or graph; online: as published
+/// at scan time; dropped: sequence gaps the live processes counted.
+const std::pair<const char*, const char*> kSummaryKeys[] = {
+    {"ate_rmse_m", "final ATE RMSE [m]"}, {"online_ate_rmse_m", "online ATE RMSE [m]"},
+    {"max_error_m", "final max error [m]"}, {"realtime_factor", "× real time"},
+    {"trajectory_poses", "poses"},         {"messages_dropped", "messages dropped (live)"}};
 
 void summaryTable(const std::vector<std::pair<std::string, nlohmann::json>>& runs, std::ostream& html) {
   html << "<h2>Summary</h2><table><tr><th>pipeline</th>";
-  for (const char* key : kSummaryKeys) html << "<th>" << key << "</th>";
+  for (const auto& [key, heading] : kSummaryKeys) html << "<th>" << heading << "</th>";
   html << "</tr>\n";
   for (const auto& [name, report] : runs) {
     html << "<tr><td>" << escapeHtml(name) << "</td>";
-    for (const char* key : kSummaryKeys) html << "<td>" << (report.contains(key) ? formatValue(report[key]) : "–") << "</td>";
+    for (const auto& [key, heading] : kSummaryKeys)
+      html << "<td>" << (report.contains(key) ? formatValue(report[key]) : "–") << "</td>";
     html << "</tr>\n";
   }
   html << "</table>\n";
+}
+
+/// The same summary as plain text, for the terminal.
+void printSummary(const std::vector<std::pair<std::string, nlohmann::json>>& runs, std::ostream& out) {
+  out << std::left << std::setw(16) << "run";
+  for (const auto& [key, heading] : kSummaryKeys) out << std::setw(24) << heading;
+  out << "\n";
+  for (const auto& [name, report] : runs) {
+    out << std::setw(16) << name;
+    for (const auto& [key, heading] : kSummaryKeys) out << std::setw(24) << (report.contains(key) ? formatValue(report[key]) : "-");
+    out << "\n";
+  }
 }
 
 void runSection(const fs::path& dir, const fs::path& root, const nlohmann::json& report, std::ostream& html) {
@@ -107,6 +126,7 @@ void writeReport(const std::string& root_dir, const std::string& title) {
        << "document.body.dataset.imagesLoaded=all.filter(i=>i.complete&&i.naturalWidth>0).length+'/'+all.length;});"
        << "</script>\n</body></html>\n";
   writeFileAtomically((root / "report.html").string(), html.str());
+  printSummary(runs, std::cout);
   std::cout << "wrote " << (root / "report.html").string() << "\n";
 }
 

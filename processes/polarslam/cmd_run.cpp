@@ -12,7 +12,7 @@
 #include "io/plot.hpp"
 #include "io/tum.hpp"
 #include "offline_log.hpp"
-#include "pipelines.hpp"
+#include "pipeline/pipelines.hpp"
 
 namespace polarslam {
 namespace {
@@ -68,13 +68,44 @@ void plotErrorOverTime(const std::string& path, const std::vector<PoseStamped>& 
   writePlotPng(path, plot);
 }
 
-void runPipeline(const RunOptions& o) {
+/// The channels a recorded live run published next to its poses: EKF SLAM (SLAM_POSE) also
+/// SCAN_ANCHORS and SLAM_MAP, PSM SLAM (PSM_SLAM_POSE) also PSM_SLAM_ANCHORS and PSM_SLAM_GRAPH.
+void addRecordedChannels(SensorChannelNames& c) {
+  if (c.estimated_pose == "SLAM_POSE") {
+    if (c.scan_anchors.empty()) c.scan_anchors = "SCAN_ANCHORS";
+    if (c.slam_map.empty()) c.slam_map = "SLAM_MAP";
+  } else if (c.estimated_pose == "PSM_SLAM_POSE") {
+    if (c.anchored_poses.empty()) c.anchored_poses = "PSM_SLAM_ANCHORS";
+    if (c.pose_graph.empty()) c.pose_graph = "PSM_SLAM_GRAPH";
+  }
+}
+
+/// ATE figures of one trajectory against ground truth, under `prefix` (e.g. "online_").
+void addAte(nlohmann::json& report, const std::string& prefix, const std::vector<PoseStamped>& estimate,
+            const std::vector<PoseStamped>& truth) {
+  if (truth.empty() || estimate.empty()) return;
+  const AteResult ate = evaluateAte(estimate, truth);
+  report[prefix + "ate"] = ateJson(ate);
+  report[prefix + "ate_rmse_m"] = ate.raw_translation.rmse;
+  report[prefix + "max_error_m"] = ate.raw_translation.max;
+}
+
+/// A live run's processes as their last PROCESS_STATUS left them; the drops are sequence gaps.
+nlohmann::json processesJson(const std::map<std::string, ProcessCounts>& processes) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& [name, p] : processes)
+    out[name] = {{"state", p.state}, {"handled", p.handled}, {"rejected", p.rejected}, {"dropped", p.dropped}};
+  return out;
+}
+
+void runPipeline(RunOptions o) {
   const auto& factories = pipelines();
   const auto factory = factories.find(o.pipeline);
   if (factory == factories.end()) throw std::runtime_error("unknown pipeline '" + o.pipeline + "'");
   if ((o.pipeline == "recorded") != !o.channels.estimated_pose.empty())
     throw std::runtime_error("--pose-channel goes with --pipeline recorded, and only with it");
   const std::string label = o.pipeline == "recorded" ? o.channels.estimated_pose + " (recorded)" : o.pipeline;
+  if (o.pipeline == "recorded") addRecordedChannels(o.channels);
   std::filesystem::create_directories(o.out);
   std::unique_ptr<Estimator> estimator = factory->second(o.pipeline_options);
   OdometryEstimator dead_reckoning;
@@ -90,14 +121,21 @@ void runPipeline(const RunOptions& o) {
   };
   visitor.ground_truth = [&](const PoseStamped& p) { truth.push_back(p); };
   visitor.estimated_pose = [&](const PoseStamped& p) { estimator->onPose(p); };
+  visitor.scan_anchors = [&](const ScanAnchors& a) { estimator->onScanAnchors(a); };
+  visitor.slam_map = [&](const FeatureMap& m) { estimator->onFeatureMap(m); };
+  visitor.anchored_pose = [&](const AnchoredPose& p) { estimator->onAnchoredPose(p); };
+  visitor.pose_graph = [&](const PoseGraph& g) { estimator->onPoseGraph(g); };
   const SensorLogSummary summary = visitSensorLog(o.log, o.channels, visitor, "run " + o.pipeline);
   nlohmann::json report;
   estimator->finish(o.out, report);
   const double run_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   const auto& estimate = estimator->trajectory();
+  const auto& online = estimator->onlineTrajectory();
   truth = inStartFrame(std::move(truth));
   writeTumTrajectory((std::filesystem::path(o.out) / "trajectory.tum").string(), estimate);
+  if (&online != &estimate)
+    writeTumTrajectory((std::filesystem::path(o.out) / "trajectory-online.tum").string(), online);
   report["pipeline"] = label;
   report["sensors"] = o.pipeline_options.sensors;
   report["log"] = o.log;
@@ -106,13 +144,16 @@ void runPipeline(const RunOptions& o) {
   report["realtime_factor"] = run_seconds > 0 ? summary.durationSeconds() / run_seconds : 0.0;
   report["messages"] = summary.messages;
   report["rejected"] = summary.rejected;
-  report["trajectory_poses"] = estimate.size();
-  if (!truth.empty() && !estimate.empty()) {
-    const AteResult ate = evaluateAte(estimate, truth);
-    report["ate"] = ateJson(ate);
-    report["ate_rmse_m"] = ate.raw_translation.rmse;
-    report["max_error_m"] = ate.raw_translation.max;
+  if (!summary.processes.empty()) {
+    report["processes"] = processesJson(summary.processes);
+    int64_t dropped = 0;
+    for (const auto& [name, p] : summary.processes) dropped += p.dropped;
+    report["messages_dropped"] = dropped;
   }
+  report["trajectory_poses"] = estimate.size();
+  // The final trajectory is the run's answer; the online one is what a live user saw at scan time.
+  addAte(report, "", estimate, truth);
+  addAte(report, "online_", online, truth);
   const std::filesystem::path dir(o.out);
   plotTrajectories((dir / "trajectory.png").string(), label + " trajectory", estimate, truth,
                    o.pipeline == "odometry" ? std::vector<PoseStamped>{} : dead_reckoning.trajectory());
@@ -120,7 +161,9 @@ void runPipeline(const RunOptions& o) {
   writeFileAtomically((dir / "report.json").string(), report.dump(2) + "\n");
   std::cout << "run " << o.pipeline << ": " << estimate.size() << " poses, "
             << report.value("realtime_factor", 0.0) << "x real time";
-  if (report.contains("ate_rmse_m")) std::cout << ", ATE RMSE " << report["ate_rmse_m"].get<double>() << " m";
+  if (report.contains("ate_rmse_m"))
+    std::cout << ", ATE RMSE " << report["ate_rmse_m"].get<double>() << " m (online "
+              << report["online_ate_rmse_m"].get<double>() << " m)";
   std::cout << " -> " << o.out << "\n";
 }
 
@@ -140,6 +183,14 @@ void setupRun(CLI::App& sub) {
   sub.add_option("--ground-truth-channel", o->channels.ground_truth)->capture_default_str();
   sub.add_option("--pose-channel", o->channels.estimated_pose,
                  "with --pipeline recorded: the pose_t channel a live run published (e.g. SLAM_POSE)");
+  sub.add_option("--anchors-channel", o->channels.scan_anchors,
+                 "with --pipeline recorded: scan_anchors_t (default SCAN_ANCHORS with SLAM_POSE)");
+  sub.add_option("--map-channel", o->channels.slam_map,
+                 "with --pipeline recorded: slam_map_t (default SLAM_MAP with SLAM_POSE)");
+  sub.add_option("--anchored-pose-channel", o->channels.anchored_poses,
+                 "with --pipeline recorded: anchored_pose_t (default PSM_SLAM_ANCHORS with PSM_SLAM_POSE)");
+  sub.add_option("--graph-channel", o->channels.pose_graph,
+                 "with --pipeline recorded: pose_graph_t (default PSM_SLAM_GRAPH with PSM_SLAM_POSE)");
   sub.callback([o] { runPipeline(*o); });
 }
 

@@ -4,7 +4,9 @@
 
 #include "common/lcm_convert.hpp"
 #include "common/lcm_log.hpp"
+#include "common/pose_graph_message.hpp"
 #include "common/progress.hpp"
+#include "polarslam/process_status_t.hpp"
 
 namespace polarslam {
 namespace {
@@ -33,6 +35,12 @@ class Dispatcher {
   SensorLogSummary& summary_;
 };
 
+void recordStatus(const LogEvent& event, SensorLogSummary& summary) {
+  process_status_t msg;
+  if (!event.decode(msg) || msg.name.empty()) return;
+  summary.processes[msg.name] = {msg.state, msg.messages_handled, msg.messages_rejected, msg.messages_dropped};
+}
+
 }  // namespace
 
 SensorLogSummary visitSensorLog(const std::string& path, const SensorChannelNames& channels,
@@ -49,6 +57,11 @@ SensorLogSummary visitSensorLog(const std::string& path, const SensorChannelName
     else if (event.channel == channels.odometry) dispatch.deliver<odometry_t>(event, visitor.odometry);
     else if (event.channel == channels.ground_truth) dispatch.deliver<pose_t>(event, visitor.ground_truth);
     else if (event.channel == channels.estimated_pose) dispatch.deliver<pose_t>(event, visitor.estimated_pose);
+    else if (event.channel == channels.scan_anchors) dispatch.deliver<scan_anchors_t>(event, visitor.scan_anchors);
+    else if (event.channel == channels.slam_map) dispatch.deliver<slam_map_t>(event, visitor.slam_map);
+    else if (event.channel == channels.anchored_poses) dispatch.deliver<anchored_pose_t>(event, visitor.anchored_pose);
+    else if (event.channel == channels.pose_graph) dispatch.deliver<pose_graph_t>(event, visitor.pose_graph);
+    else if (event.channel == "PROCESS_STATUS") recordStatus(event, summary);
     if (++events % 256 == 0) progress.update(reader.progress());
   }
   progress.finish();

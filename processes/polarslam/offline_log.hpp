@@ -8,6 +8,8 @@
 #include "geometry/features.hpp"
 #include "laser/laser_scan.hpp"
 #include "odometry/odometry_reading.hpp"
+#include "slam/feature_map.hpp"
+#include "slam/pose_graph.hpp"
 #include "sonar/sonar_targets.hpp"
 
 namespace polarslam {
@@ -15,6 +17,9 @@ namespace polarslam {
 struct SensorChannelNames {
   std::string laser = "LASER", sonar = "SONAR", odometry = "ODOMETRY", ground_truth = "GROUND_TRUTH";
   std::string estimated_pose;  ///< pose_t estimates to read as well (empty: none)
+  /// What a recorded live run published besides poses (empty: none): the EKF's scan_anchors_t
+  /// and slam_map_t, PSM SLAM's anchored_pose_t and pose_graph_t.
+  std::string scan_anchors, slam_map, anchored_poses, pose_graph;
 };
 
 struct SensorLogVisitor {
@@ -23,16 +28,28 @@ struct SensorLogVisitor {
   std::function<void(const OdometryReading&)> odometry;
   std::function<void(const PoseStamped&)> ground_truth;
   std::function<void(const PoseStamped&)> estimated_pose;
+  std::function<void(const ScanAnchors&)> scan_anchors;
+  std::function<void(const FeatureMap&)> slam_map;
+  std::function<void(const AnchoredPose&)> anchored_pose;
+  std::function<void(const PoseGraph&)> pose_graph;
+};
+
+/// The last PROCESS_STATUS of one process in a recorded live run.
+struct ProcessCounts {
+  std::string state;
+  int64_t handled = 0, rejected = 0, dropped = 0;
 };
 
 struct SensorLogSummary {
   std::map<std::string, long> messages;  ///< per channel, accepted
   std::map<std::string, long> rejected;  ///< per reason
+  std::map<std::string, ProcessCounts> processes;  ///< PROCESS_STATUS by process name (live recordings)
   int64_t first_utime = 0, last_utime = 0;
   double durationSeconds() const { return static_cast<double>(last_utime - first_utime) * 1e-6; }
 };
 
-/// Calls the visitor's functions in log order; other channels are ignored. Messages that do
+/// Calls the visitor's functions in log order; PROCESS_STATUS goes into the summary; other
+/// channels are ignored. Messages that do
 /// not decode or validate are counted in the summary (first of each reason logged to stderr).
 SensorLogSummary visitSensorLog(const std::string& path, const SensorChannelNames& channels,
                                 const SensorLogVisitor& visitor, const std::string& progress_label = "");

@@ -25,7 +25,7 @@
 #include "grid/grid_files.hpp"
 #include "grid/pose_regeneration.hpp"
 #include "sim/simulator.hpp"
-#include "slam/feature_slam_estimator.hpp"
+#include "pipeline/feature_slam_estimator.hpp"
 
 using namespace polarslam;
 

@@ -20,9 +20,9 @@
 #include "io/relations.hpp"
 #include "io/tum.hpp"
 #include "scanmatch/laser_odometry.hpp"
-#include "slam/estimator.hpp"
+#include "pipeline/estimator.hpp"
 #include "slam/psm_slam.hpp"
-#include "slam/psm_slam_estimator.hpp"
+#include "pipeline/psm_slam_estimator.hpp"
 
 using namespace polarslam;
 

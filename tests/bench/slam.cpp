@@ -26,8 +26,8 @@
 #include "eval/trajectory_lookup.hpp"
 #include "io/tum.hpp"
 #include "sim/simulator.hpp"
-#include "slam/feature_slam_estimator.hpp"
-#include "slam/psm_slam_estimator.hpp"
+#include "pipeline/feature_slam_estimator.hpp"
+#include "pipeline/psm_slam_estimator.hpp"
 
 using namespace polarslam;
 
@@ -113,7 +113,7 @@ std::vector<PoseStamped> inStartFrame(std::vector<PoseStamped> poses) {
 RunResult evaluate(FeatureSlamEstimator& e, const std::vector<PoseStamped>& truth, double run_seconds,
                    double wall_seconds, const Options& o) {
   RunResult r;
-  const auto& estimate = e.trajectory();
+  const auto& estimate = e.filterPoses();  // the filter itself: its NEES, its ATE
   const AteResult ate = evaluateAte(estimate, truth);
   r.ate_rmse = ate.raw_translation.rmse;
   r.max_error = ate.raw_translation.max;

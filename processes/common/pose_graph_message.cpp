@@ -1,11 +1,19 @@
 #include "pose_graph_message.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "common/lcm_convert.hpp"
 
 namespace polarslam {
+namespace {
+
+bool allFinite(const std::vector<double>& values) {
+  return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
+}
+
+}  // namespace
 
 polarslam::pose_graph_t toLcm(const PoseGraph& graph, int64_t utime, int64_t seq, int32_t optimizations,
                               double optimization_seconds) {
@@ -48,11 +56,13 @@ std::string fromLcm(const polarslam::pose_graph_t& msg, PoseGraph& out) {
   try {
     for (size_t i = 0; i < nodes; ++i) {
       if (msg.node_pose[i].size() != 3) return "pose graph node pose is not 3 numbers";
+      if (!allFinite(msg.node_pose[i])) return "pose graph: non-finite node pose";
       graph.addNode({msg.node_id[i], msg.node_utime[i], Pose2(msg.node_pose[i][0], msg.node_pose[i][1], msg.node_pose[i][2])});
     }
     for (size_t i = 0; i < edges; ++i) {
       if (msg.edge_measurement[i].size() != 3 || msg.edge_cov[i].size() != 9) return "pose graph edge arrays have wrong sizes";
       if (msg.edge_kind[i] < 0 || msg.edge_kind[i] > 2) return "pose graph edge kind out of range";
+      if (!allFinite(msg.edge_measurement[i]) || !allFinite(msg.edge_cov[i])) return "pose graph: non-finite edge";
       PoseGraphEdge e;
       e.from = msg.edge_from[i];
       e.to = msg.edge_to[i];
@@ -66,6 +76,26 @@ std::string fromLcm(const polarslam::pose_graph_t& msg, PoseGraph& out) {
     return std::string("pose graph: ") + e.what();
   }
   out = std::move(graph);
+  return {};
+}
+
+polarslam::anchored_pose_t toLcm(const AnchoredPose& pose, int64_t seq) {
+  polarslam::anchored_pose_t msg;
+  msg.utime = pose.utime;
+  msg.seq = seq;
+  msg.node_id = pose.node;
+  msg.relative[0] = pose.relative.x;
+  msg.relative[1] = pose.relative.y;
+  msg.relative[2] = pose.relative.theta;
+  msg.new_node = pose.new_node;
+  return msg;
+}
+
+std::string fromLcm(const polarslam::anchored_pose_t& msg, AnchoredPose& out) {
+  if (!std::isfinite(msg.relative[0]) || !std::isfinite(msg.relative[1]) || !std::isfinite(msg.relative[2]))
+    return "anchored pose: non-finite value";
+  if (msg.node_id < -1) return "anchored pose: node id below -1";
+  out = {msg.utime, msg.node_id, Pose2(msg.relative[0], msg.relative[1], wrapAngle(msg.relative[2])), msg.new_node != 0};
   return {};
 }
 

@@ -1,4 +1,4 @@
-#include "slam/psm_slam_estimator.hpp"
+#include "pipeline/psm_slam_estimator.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -6,8 +6,6 @@
 #include <stdexcept>
 
 #include "grid/grid_files.hpp"
-#include "grid/occupancy_grid.hpp"
-#include "io/plot.hpp"
 
 namespace polarslam {
 namespace {
@@ -46,7 +44,15 @@ PsmSlamEstimatorConfig loadPsmSlamEstimatorConfig(const std::string& yaml_path) 
   return config;
 }
 
-PsmSlamEstimator::PsmSlamEstimator(PsmSlamEstimatorConfig config) : config_(std::move(config)), slam_(config_.slam) {}
+GridOptions gridOptions(const PsmSlamMapOptions& map) {
+  GridOptions options;
+  options.resolution = map.resolution;
+  options.max_range = map.max_range;
+  return options;
+}
+
+PsmSlamEstimator::PsmSlamEstimator(PsmSlamEstimatorConfig config)
+    : config_(std::move(config)), slam_(config_.slam), map_scans_(config_.map.all_scans) {}
 
 void PsmSlamEstimator::onOdometry(const OdometryReading& odometry) {
   const auto start = std::chrono::steady_clock::now();
@@ -58,11 +64,9 @@ void PsmSlamEstimator::onLaser(const LaserScan& scan) {
   const auto start = std::chrono::steady_clock::now();
   const PsmSlamScanResult result = slam_.addScan(scan);
   slam_seconds_ += secondsSince(start);
-  if (config_.map.all_scans ? result.usable : result.new_keyframe) {
-    map_scans_.push_back(scan);
-    map_scan_index_.push_back(scans_seen_);
-  }
-  ++scans_seen_;
+  online_.push_back(result.pose);
+  anchors_.push_back(result.anchor);
+  map_scans_.add(scan, result.anchor);
 }
 
 nlohmann::json psmSlamReportJson(const PsmSlam& slam, const PoseGraphOptimizationSummary& final_optimization) {
@@ -102,7 +106,8 @@ nlohmann::json psmSlamReportJson(const PsmSlam& slam, const PoseGraphOptimizatio
 void PsmSlamEstimator::finish(const std::string& out_dir, nlohmann::json& report) {
   const auto start = std::chrono::steady_clock::now();
   const PoseGraphOptimizationSummary summary = slam_.optimize();
-  trajectory_ = slam_.trajectory();
+  final_ = reanchor(anchors_, slam_.graph());
+  finished_ = true;
   slam_seconds_ += secondsSince(start);
   nlohmann::json section = psmSlamReportJson(slam_, summary);
   section["slam_seconds"] = slam_seconds_;
@@ -111,33 +116,24 @@ void PsmSlamEstimator::finish(const std::string& out_dir, nlohmann::json& report
 }
 
 void PsmSlamEstimator::writeMap(const std::string& out_dir, nlohmann::json& report) {
-  if (map_scans_.empty()) {
+  if (map_scans_.size() == 0) {
     report["grid"] = {{"written", false}, {"reason", "no usable scans"}};
     return;
   }
   const auto start = std::chrono::steady_clock::now();
-  std::vector<Pose2> poses;
-  poses.reserve(map_scans_.size());
-  for (const size_t i : map_scan_index_) poses.push_back(trajectory_[i].pose);
-  GridOptions options;
-  options.resolution = config_.map.resolution;
-  options.max_range = config_.map.max_range;
-  const OccupancyGrid grid = buildGrid(map_scans_, poses, options);
-  GridPicture picture;
+  const GridOptions options = gridOptions(config_.map);
+  const GraphGrid grid = buildGraphGrid(map_scans_, slam_.graph(), options);
+  GridPicture picture = graphGridPicture(grid, slam_.graph(), final_);
   picture.title = "psm-slam: occupancy grid of the reference scans";
-  PlotSeries path{"trajectory", {}, seriesColor(0), 1.2, 0};
-  for (const auto& p : trajectory_) path.points.push_back(p.pose.translation());
-  PlotSeries references{"reference scans", {}, seriesColor(1), 0, 2.0};
-  for (const auto& p : poses) references.points.push_back(p.translation());
-  picture.paths = {path, references};
-  const GridSlice slice = grid.slice();
-  const GridFiles files = writeGridFiles(out_dir, grid, slice, picture);
+  const GridSlice& slice = grid.slice;
+  const GridFiles files = writeGridFiles(out_dir, grid.grid, slice, picture);
   report["grid"] = {{"written", true},
                     {"scans", map_scans_.size()},
                     {"resolution_m", options.resolution},
                     {"max_range_m", options.max_range},
                     {"width", slice.width},
                     {"height", slice.height},
+                    {"build_seconds", grid.build_seconds},
                     {"files", {files.ot, files.bt, files.pgm, files.yaml, files.png}},
                     {"seconds", secondsSince(start)}};
 }

@@ -1,7 +1,7 @@
-#include "pipelines.hpp"
+#include "pipeline/pipelines.hpp"
 
-#include "slam/feature_slam_estimator.hpp"
-#include "slam/psm_slam_estimator.hpp"
+#include "pipeline/feature_slam_estimator.hpp"
+#include "pipeline/psm_slam_estimator.hpp"
 
 namespace polarslam {
 
@@ -12,8 +12,7 @@ const std::map<std::string, PipelineFactory>& pipelines() {
       {"ekf",
        [](const PipelineOptions& o) -> std::unique_ptr<Estimator> {
          const SlamSensors sensors = parseSlamSensors(o.sensors);
-         return std::make_unique<FeatureSlamEstimator>(
-             o.config.empty() ? configForRobot(SimConfig{}, sensors) : loadFeatureSlamConfig(o.config, sensors));
+         return std::make_unique<FeatureSlamEstimator>(loadFeaturePipelineConfig(o.config, sensors));
        }},
       {"psm-slam",
        [](const PipelineOptions& o) -> std::unique_ptr<Estimator> {

@@ -1,7 +1,10 @@
 #pragma once
-// `polarslam run --pipeline psm-slam`: PsmSlam over a log, then at the end a global pose-graph
-// optimisation, one pose per scan (trajectory.tum) and the occupancy grid of the reference scans
-// at their optimised poses (map.ot, map.bt, map.pgm + map.yaml, map.png).
+// `polarslam run --pipeline psm-slam`: PsmSlam over a log (the class polarslam-psm-slam runs
+// live), then at the end a global pose-graph optimisation and the occupancy grid of the reference
+// scans at their optimised poses (map.ot, map.bt, map.pgm + map.yaml, map.png; the same
+// GraphScanStore polarslam-grid uses live). Two trajectories, one pose per scan: online (as
+// published on PSM_SLAM_POSE at scan time) and final (each scan's pose relative to its reference
+// scan, as published on PSM_SLAM_ANCHORS, re-placed by the final graph).
 //
 // Configuration (`--config FILE`): the keys of PsmSlamParams (psm_slam_params.hpp) plus
 //   grid_resolution: 0.05     # m
@@ -13,7 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "slam/estimator.hpp"
+#include "grid/graph_scan_store.hpp"
+#include "pipeline/estimator.hpp"
 #include "slam/psm_slam.hpp"
 
 namespace polarslam {
@@ -23,6 +27,9 @@ struct PsmSlamMapOptions {
   double max_range = 15.0;   ///< m
   bool all_scans = false;    ///< false: only the reference scans (they cover the map by construction)
 };
+
+/// The grid options of a PSM SLAM map (offline and in polarslam-grid).
+GridOptions gridOptions(const PsmSlamMapOptions& map);
 
 struct PsmSlamEstimatorConfig {
   PsmSlamParams slam;
@@ -39,7 +46,9 @@ class PsmSlamEstimator : public Estimator {
   std::string name() const override { return "psm-slam"; }
   void onOdometry(const OdometryReading& odometry) override;
   void onLaser(const LaserScan& scan) override;
-  const std::vector<PoseStamped>& trajectory() const override { return trajectory_; }
+  /// Final trajectory after finish(), the online one before.
+  const std::vector<PoseStamped>& trajectory() const override { return finished_ ? final_ : online_; }
+  const std::vector<PoseStamped>& onlineTrajectory() const override { return online_; }
   /// Optimises, writes the grid files, adds "psm_slam" and "grid" figures to the report.
   void finish(const std::string& out_dir, nlohmann::json& report) override;
 
@@ -52,10 +61,10 @@ class PsmSlamEstimator : public Estimator {
 
   PsmSlamEstimatorConfig config_;
   PsmSlam slam_;
-  std::vector<PoseStamped> trajectory_;
-  std::vector<LaserScan> map_scans_;  ///< the scans the map is built from
-  std::vector<size_t> map_scan_index_; ///< index of each in the trajectory (one pose per scan)
-  size_t scans_seen_ = 0;
+  std::vector<PoseStamped> online_, final_;
+  std::vector<AnchoredPose> anchors_;  ///< one per scan
+  bool finished_ = false;
+  GraphScanStore map_scans_;           ///< the scans the map is built from
   double slam_seconds_ = 0.0;
 };
 

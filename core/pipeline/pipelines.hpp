@@ -5,7 +5,7 @@
 #include <memory>
 #include <string>
 
-#include "slam/estimator.hpp"
+#include "pipeline/estimator.hpp"
 
 namespace polarslam {
 

@@ -1,0 +1,69 @@
+#include "pipeline/estimator.hpp"
+
+#include "pipeline/feature_slam_estimator.hpp"
+
+namespace polarslam {
+
+void OdometryEstimator::onOdometry(const OdometryReading& odometry) {
+  if (!started_) {
+    origin_inverse_ = odometry.pose.inverse();
+    started_ = true;
+  }
+  trajectory_.push_back({odometry.utime, origin_inverse_ * odometry.pose, odometry.cov});
+}
+
+bool RecordedEstimator::inOrder(int64_t& last, int64_t utime) {
+  if (utime <= last) {
+    ++out_of_order_;
+    return false;
+  }
+  last = utime;
+  return true;
+}
+
+void RecordedEstimator::onPose(const PoseStamped& pose) {
+  if (inOrder(last_pose_, pose.utime)) published_.push_back(pose);
+}
+
+void RecordedEstimator::onScanAnchors(const ScanAnchors& anchors) {
+  if (inOrder(last_anchors_, anchors.utime)) scan_anchors_.push_back(anchors);
+}
+
+void RecordedEstimator::onFeatureMap(const FeatureMap& map) {
+  map_ = map;
+  ++maps_;
+}
+
+void RecordedEstimator::onAnchoredPose(const AnchoredPose& pose) {
+  if (inOrder(last_anchored_, pose.utime)) anchored_.push_back(pose);
+}
+
+void RecordedEstimator::onPoseGraph(const PoseGraph& graph) {
+  graph_ = graph;
+  ++graphs_;
+}
+
+void RecordedEstimator::finish(const std::string&, nlohmann::json& report) {
+  std::string final_source = "published poses (nothing to re-place them with)";
+  size_t missing_nodes = 0;
+  online_ = scan_anchors_.empty() ? published_ : anchorPoses(scan_anchors_);
+  final_ = online_;
+  if (!scan_anchors_.empty() && map_) {
+    final_ = regeneratedTrajectory(scan_anchors_, *map_);
+    final_source = "scan anchors regenerated in the last map";
+  } else if (!anchored_.empty() && graph_) {
+    final_ = reanchor(anchored_, *graph_, &missing_nodes);
+    final_source = "anchored poses re-placed by the last pose graph";
+  }
+  finished_ = true;
+  report["recorded"] = {{"published_poses", published_.size()},
+                        {"scan_anchors", scan_anchors_.size()},
+                        {"anchored_poses", anchored_.size()},
+                        {"maps", maps_},
+                        {"graphs", graphs_},
+                        {"anchors_without_node", missing_nodes},
+                        {"final_from", final_source},
+                        {"out_of_order_dropped", out_of_order_}};
+}
+
+}  // namespace polarslam

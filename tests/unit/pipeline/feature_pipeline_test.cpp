@@ -1,0 +1,182 @@
+// The EKF pipeline's one definition: the configuration file the processes and `polarslam run`
+// read, the laser feature stage (break hints from the sonar), and the estimator's two
+// trajectories (online at scan time, final regenerated in the final map) on a simulated run.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+
+#include "eval/ate.hpp"
+#include "pipeline/feature_slam_estimator.hpp"
+#include "sim/simulator.hpp"
+
+namespace polarslam {
+namespace {
+
+std::string source(const std::string& rel) { return std::string(POLARSLAM_SOURCE_DIR) + "/" + rel; }
+
+TEST(FeaturePipelineConfig, TheShippedFileHoldsTheDefaultsOfTheDefaultRobot) {
+  const FeaturePipelineConfig file = loadFeaturePipelineConfig(source("config/ekf.yaml"), SlamSensors::Fused);
+  const FeaturePipelineConfig robot = loadFeaturePipelineConfig(source("config/robots/default.yaml"), SlamSensors::Fused);
+  const FeaturePipelineConfig defaults;
+  EXPECT_EQ(file.slam.association.gate_probability, defaults.slam.association.gate_probability);
+  EXPECT_EQ(file.slam.new_feature_probability, defaults.slam.new_feature_probability);
+  EXPECT_EQ(file.slam.tentative_gate_probability, defaults.slam.tentative_gate_probability);
+  EXPECT_EQ(file.slam.confirm_observations, defaults.slam.confirm_observations);
+  EXPECT_EQ(file.slam.tentative_timeout_s, defaults.slam.tentative_timeout_s);
+  EXPECT_EQ(file.slam.max_line_extent_gap, defaults.slam.max_line_extent_gap);
+  EXPECT_EQ(file.slam.anchor_radius, defaults.slam.anchor_radius);
+  EXPECT_EQ(file.slam.max_anchors, defaults.slam.max_anchors);
+  EXPECT_EQ(file.slam.latency_s, defaults.slam.latency_s);
+  EXPECT_EQ(file.slam.association.ambiguity_nis_margin, defaults.slam.association.ambiguity_nis_margin);
+  EXPECT_EQ(file.slam.association.max_nodes, defaults.slam.association.max_nodes);
+  EXPECT_EQ(file.fusion.fusion.gate_probability, defaults.fusion.fusion.gate_probability);
+  EXPECT_EQ(file.fusion.max_sonar_offset_s, defaults.fusion.max_sonar_offset_s);
+  EXPECT_EQ(file.fusion.sonar_wait_s, defaults.fusion.sonar_wait_s);
+  EXPECT_EQ(file.fusion.laser_wait_s, defaults.fusion.laser_wait_s);
+  // The robot it names is the default robot: the same error models as the robot file itself.
+  EXPECT_EQ(file.laser.errors.range.noise_sigma, robot.laser.errors.range.noise_sigma);
+  EXPECT_EQ(file.laser.errors.range.fixed_bias, robot.laser.errors.range.fixed_bias);
+  EXPECT_EQ(file.slam.odometry.wheels.wheelbase, robot.slam.odometry.wheels.wheelbase);
+  EXPECT_EQ(file.fusion.sonar.range_sigma_floor, robot.fusion.sonar.range_sigma_floor);
+  EXPECT_TRUE(file.sonar_break_hints);
+}
+
+TEST(FeaturePipelineConfig, UnknownKeysAndOutOfRangeValuesNameTheFileAndLine) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const auto path = (dir / ("polarslam-ekf-config-" + std::to_string(::getpid()) + ".yaml")).string();
+  std::ofstream(path) << "ekf:\n  latency_s: 0.3\n  gate_probabilty: 0.9\n";
+  try {
+    loadFeaturePipelineConfig(path, SlamSensors::Fused);
+    FAIL() << "a misspelt key was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ":"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("gate_probabilty"), std::string::npos) << e.what();
+  }
+  std::ofstream(path) << "fusion:\n  sonar_wait_s: -1\n";
+  EXPECT_THROW(loadFeaturePipelineConfig(path, SlamSensors::Fused), std::runtime_error);
+  std::filesystem::remove(path);
+}
+
+/// A simulated run of the office world, every message kept in time order.
+struct SimulatedRun : SimSink {
+  std::vector<LaserScan> scans;
+  std::vector<SonarScan> sonar;
+  std::vector<OdometryReading> odometry;
+  std::vector<PoseStamped> truth;
+  std::vector<std::function<void(Estimator&)>> events;
+  void onLaser(const LaserScan& s) override {
+    scans.push_back(s);
+    events.push_back([s](Estimator& e) { e.onLaser(s); });
+  }
+  void onSonar(const SonarScan& s) override {
+    sonar.push_back(s);
+    events.push_back([s](Estimator& e) { e.onSonar(s); });
+  }
+  void onOdometry(const OdometryReading& o) override {
+    odometry.push_back(o);
+    events.push_back([o](Estimator& e) { e.onOdometry(o); });
+  }
+  void onGroundTruth(const PoseStamped& p) override { truth.push_back(p); }
+};
+
+const SimulatedRun& officeRun() {
+  static const SimulatedRun run = [] {
+    SimulatedRun r;
+    Simulator sim(loadWorld(source("config/worlds/office.yaml")), loadSimConfig(source("config/robots/default.yaml")), 5);
+    while (sim.time() < 60.0 && !sim.finished()) sim.step(r);
+    return r;
+  }();
+  return run;
+}
+
+std::vector<PoseStamped> inStartFrame(std::vector<PoseStamped> poses) {
+  const Pose2 inverse = poses.front().pose.inverse();
+  for (auto& p : poses) p.pose = inverse * p.pose;
+  return poses;
+}
+
+TEST(LaserFeatureStage, FusedSensorsBreakLaserSegmentsWhereTheSonarSawCornersAndEdges) {
+  const SimulatedRun& run = officeRun();
+  const FeaturePipelineConfig fused = loadFeaturePipelineConfig(source("config/ekf.yaml"), SlamSensors::Fused);
+  const FeaturePipelineConfig laser_only = loadFeaturePipelineConfig(source("config/ekf.yaml"), SlamSensors::Laser);
+  LaserFeatureStage with_hints(fused), without(laser_only);
+  EXPECT_TRUE(with_hints.usesSonar());
+  EXPECT_FALSE(without.usesSonar());
+  size_t o = 0, s = 0, scans_with_hints = 0;
+  for (const LaserScan& scan : run.scans) {
+    for (; o < run.odometry.size() && run.odometry[o].utime <= scan.utime; ++o) {
+      with_hints.addOdometry(run.odometry[o]);
+      without.addOdometry(run.odometry[o]);
+    }
+    for (; s < run.sonar.size() && run.sonar[s].utime <= scan.utime; ++s) {
+      with_hints.addSonar(run.sonar[s]);
+      without.addSonar(run.sonar[s]);
+    }
+    const FeatureSet hinted = with_hints.extract(scan);
+    EXPECT_TRUE(without.extract(scan).break_hints.empty());
+    if (hinted.break_hints.empty()) continue;
+    ++scans_with_hints;
+    for (double bearing : hinted.break_hints) EXPECT_TRUE(std::isfinite(bearing));
+  }
+  // The office has door frames and corners in sonar view most of the time.
+  EXPECT_GT(scans_with_hints, run.scans.size() / 10);
+}
+
+TEST(FeatureSlamEstimator, FinalTrajectoryIsRegeneratedInTheFinalMapOnePosePerScan) {
+  const SimulatedRun& run = officeRun();
+  FeatureSlamEstimator ekf(loadFeaturePipelineConfig(source("config/ekf.yaml"), SlamSensors::Fused));
+  for (const auto& event : run.events) event(ekf);
+  nlohmann::json report;
+  ekf.finish("", report);
+  const auto& online = ekf.onlineTrajectory();
+  const auto& final_poses = ekf.trajectory();
+  ASSERT_EQ(online.size(), run.scans.size());
+  ASSERT_EQ(final_poses.size(), run.scans.size());
+  for (size_t i = 0; i < run.scans.size(); ++i) {
+    EXPECT_EQ(online[i].utime, run.scans[i].utime);
+    EXPECT_EQ(final_poses[i].utime, run.scans[i].utime);
+  }
+  const std::vector<PoseStamped> truth = inStartFrame(run.truth);
+  const double online_ate = evaluateAte(online, truth).raw_translation.rmse;
+  const double final_ate = evaluateAte(final_poses, truth).raw_translation.rmse;
+  EXPECT_LT(final_ate, 0.05);
+  EXPECT_LT(final_ate, online_ate * 1.25) << "online " << online_ate << " m, final " << final_ate << " m";
+  // Regenerated, not copied: later map information moves the early poses.
+  double moved = 0.0;
+  for (size_t i = 0; i < online.size(); ++i)
+    moved = std::max(moved, (online[i].pose.translation() - final_poses[i].pose.translation()).norm());
+  EXPECT_GT(moved, 1e-4);
+}
+
+TEST(RecordedEstimator, AnchorsAndTheLastMapGiveTheOfflineFinalTrajectory) {
+  const SimulatedRun& run = officeRun();
+  FeatureSlamEstimator ekf(loadFeaturePipelineConfig("", SlamSensors::Fused));
+  for (const auto& event : run.events) event(ekf);
+  nlohmann::json report;
+  ekf.finish("", report);
+  RecordedEstimator recorded;
+  for (const ScanAnchors& a : ekf.anchors()) recorded.onScanAnchors(a);
+  recorded.onScanAnchors(ekf.anchors().front());  // a stale repeat: dropped and counted
+  FeatureMap early = ekf.slam().map();
+  early.features.resize(early.features.size() / 2);
+  recorded.onFeatureMap(early);
+  recorded.onFeatureMap(ekf.slam().map());  // the last map counts
+  nlohmann::json recorded_report;
+  recorded.finish("", recorded_report);
+  ASSERT_EQ(recorded.trajectory().size(), ekf.trajectory().size());
+  for (size_t i = 0; i < ekf.trajectory().size(); ++i) {
+    EXPECT_NEAR(recorded.trajectory()[i].pose.x, ekf.trajectory()[i].pose.x, 1e-12);
+    EXPECT_NEAR(recorded.trajectory()[i].pose.y, ekf.trajectory()[i].pose.y, 1e-12);
+    EXPECT_NEAR(recorded.onlineTrajectory()[i].pose.x, ekf.onlineTrajectory()[i].pose.x, 1e-12);
+  }
+  EXPECT_EQ(recorded_report["recorded"]["out_of_order_dropped"], 1);
+  EXPECT_EQ(recorded_report["recorded"]["maps"], 2);
+}
+
+}  // namespace
+}  // namespace polarslam
