@@ -118,6 +118,24 @@ void ProcessTable::cancelPendingStarts() {
     else if (r.state == RunState::Restarting) r.state = RunState::Crashed;
 }
 
+std::vector<size_t> ProcessTable::nextToStop() const {
+  std::vector<size_t> next;
+  for (size_t i : running()) {
+    const int order = records_[i].spec.start_order;
+    if (!next.empty() && order < records_[next.front()].spec.start_order) continue;
+    if (!next.empty() && order > records_[next.front()].spec.start_order) next.clear();
+    next.push_back(i);
+  }
+  return next;
+}
+
+std::vector<size_t> ProcessTable::running() const {
+  std::vector<size_t> found;
+  for (size_t i = 0; i < records_.size(); ++i)
+    if (records_[i].state == RunState::Running) found.push_back(i);
+  return found;
+}
+
 void ProcessTable::setUsage(size_t i, double cpu_percent, double rss_mb) {
   records_[i].cpu_percent = cpu_percent;
   records_[i].rss_mb = rss_mb;

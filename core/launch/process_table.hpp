@@ -74,6 +74,11 @@ class ProcessTable {
   void stopping(size_t i, LaunchClock::time_point now);
   /// Cancels every pending (re)start, for shutdown.
   void cancelPendingStarts();
+  /// The running commands to stop next: those of the highest start_order, because the stop
+  /// order is the reverse of the start order. Empty when nothing runs.
+  std::vector<size_t> nextToStop() const;
+  /// Every running command.
+  std::vector<size_t> running() const;
   void setUsage(size_t i, double cpu_percent, double rss_mb);
 
   /// True while anything runs, stops or waits to (re)start.

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <csignal>
 #include <cstdlib>
 #include <fstream>
@@ -14,6 +15,10 @@ namespace polarslam {
 namespace {
 
 std::atomic<bool> g_stop{false};
+// After a stop, input already queued is still handled: until nothing has come for kDrainQuiet,
+// but for kDrainLimit at most, so that a peer that keeps publishing cannot hold up the exit.
+constexpr int kDrainQuietMs = 50;
+constexpr auto kDrainLimit = std::chrono::seconds(2);
 void onSignal(int) { g_stop = true; }
 
 double residentMegabytes() {
@@ -151,7 +156,22 @@ void ProcessContext::run(std::function<bool()> done, std::function<void()> tick,
       next_status = now + std::chrono::seconds(1);
     }
   }
+  drainQueuedInput();
   publishStatus("stopped");
+}
+
+// Stages stop in reverse start order (polarslam-launch): when one is told to stop, those feeding
+// it have already exited, and their last messages wait in its queue. Handled before the exit
+// work, they reach the final outputs.
+void ProcessContext::drainQueuedInput() {
+  const auto give_up = std::chrono::steady_clock::now() + kDrainLimit;
+  while (std::chrono::steady_clock::now() < give_up) {
+    errno = 0;
+    const int result = lcm_->handleTimeout(kDrainQuietMs);
+    if (result == 0) break;                   // quiet: nothing more was queued
+    if (result < 0 && errno != EINTR) break;  // a receive error, not just another signal
+  }
+  if (journal_) journal_->flushIfDue();
 }
 
 }  // namespace polarslam

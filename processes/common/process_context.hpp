@@ -100,6 +100,8 @@ class ProcessContext {
 
   void publishStatus(const std::string& state);
   /// Runs until SIGINT/SIGTERM or until `done()` returns true; calls `tick` about every period.
+  /// Then handles the input already queued (a couple of seconds at most) and returns, so that
+  /// the caller's exit work (final map, final graph) includes it.
   void run(std::function<bool()> done = {}, std::function<void()> tick = {},
            std::chrono::milliseconds tick_period = std::chrono::milliseconds(1000));
   static bool stopRequested();
@@ -107,6 +109,7 @@ class ProcessContext {
 
  private:
   void resumeFromJournal();
+  void drainQueuedInput();
 
   struct Subscription {
     ProcessContext* context = nullptr;

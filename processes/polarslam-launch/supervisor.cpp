@@ -66,6 +66,7 @@ int Supervisor::run() {
     readOutput(false);
     reapChildren(LaunchClock::now());
     enforceDeadlines(LaunchClock::now());
+    if (shutting_down_ && ending_.empty()) stopNextLevel(LaunchClock::now());
   }
   if (!shutting_down_) event("every command has ended");
   killStrayDescendants();
@@ -123,7 +124,8 @@ void Supervisor::handleSignals(LaunchClock::time_point now) {
       console_.refresh(table_, now, true);
     } else if (sig == SIGINT || sig == SIGTERM || sig == SIGHUP) {
       if (!shutting_down_) {
-        event("received " + signalName(sig) + ": stopping everything (send it again to kill at once)");
+        event("received " + signalName(sig) +
+              ": stopping everything in reverse start order (send it again to kill at once)");
         beginShutdown(now);
         shutdown_began_ = now;
       } else if (now - shutdown_began_ < kRepeatedSignalWindow) {
@@ -131,7 +133,7 @@ void Supervisor::handleSignals(LaunchClock::time_point now) {
         // only a later, deliberate repeat means "kill now".
       } else {
         event("received " + signalName(sig) + " again: killing everything now");
-        killAll();
+        killAll(now);
       }
     }
   }
@@ -205,21 +207,35 @@ void Supervisor::onExit(size_t i, ExitStatus status, LaunchClock::time_point now
 void Supervisor::beginShutdown(LaunchClock::time_point now) {
   shutting_down_ = true;
   table_.cancelPendingStarts();
-  for (size_t i = 0; i < table_.size(); ++i) {
-    if (table_[i].state != RunState::Running) continue;
-    const ProcessRecord& r = table_[i];
-    signalGroup(r.pid, r.spec.stop_signal);  // the whole group: children of children stop too
-    table_.stopping(i, now);
-    ending_[r.pid] = {r.spec.name, table_[i].kill_deadline, false};
-    publish(i);
-  }
+  stopNextLevel(now);
 }
 
-void Supervisor::killAll() {
+// Called again whenever every group asked to stop is gone: the stop order is the reverse of the
+// start order, so consumers that started first (a recorder, the mapping) still receive what the
+// stages above them publish while they finish.
+void Supervisor::stopNextLevel(LaunchClock::time_point now) {
+  const std::vector<size_t> level = table_.nextToStop();
+  if (level.empty()) return;
+  std::string names;
+  for (size_t i : level) names += " " + table_[i].spec.name;
+  event("stopping start_order " + std::to_string(table_[level.front()].spec.start_order) + ":" + names);
+  for (size_t i : level) signalToStop(i, table_[i].spec.stop_signal, now);
+}
+
+void Supervisor::signalToStop(size_t i, int sig, LaunchClock::time_point now) {
+  const int pgid = table_[i].pid;
+  signalGroup(pgid, sig);  // the whole group: children of children stop too
+  table_.stopping(i, now);
+  ending_[pgid] = {table_[i].spec.name, table_[i].kill_deadline, sig == SIGKILL};
+  publish(i);
+}
+
+void Supervisor::killAll(LaunchClock::time_point now) {
   for (auto& [pgid, group] : ending_) {
     signalGroup(pgid, SIGKILL);
     group.killed = true;
   }
+  for (size_t i : table_.running()) signalToStop(i, SIGKILL, now);  // the levels still waiting their turn
 }
 
 void Supervisor::enforceDeadlines(LaunchClock::time_point now) {

@@ -1,7 +1,8 @@
 #pragma once
 // The launcher's main loop: starts the selected commands on schedule, forwards and logs their
 // output, restarts crashed ones with back-off, publishes their status, and on SIGINT/SIGTERM/
-// SIGHUP stops them all (stop signal, grace, SIGKILL) and waits until no descendant is left.
+// SIGHUP stops them all (stop signal, grace, SIGKILL), in reverse start order, level by level,
+// and waits until no descendant is left.
 #include <map>
 #include <string>
 #include <vector>
@@ -53,7 +54,9 @@ class Supervisor {
   void reapChildren(LaunchClock::time_point now);
   void onExit(size_t i, ExitStatus status, LaunchClock::time_point now);
   void beginShutdown(LaunchClock::time_point now);
-  void killAll();
+  void stopNextLevel(LaunchClock::time_point now);
+  void signalToStop(size_t i, int sig, LaunchClock::time_point now);
+  void killAll(LaunchClock::time_point now);
   void enforceDeadlines(LaunchClock::time_point now);
   void killStrayDescendants();
   void sampleUsage(LaunchClock::time_point now);

@@ -326,6 +326,133 @@ commands:
   }
 }
 
+namespace {
+
+/// Shell commands that write "NAME started|signalled|stopped at <CLOCK_MONOTONIC ns>" lines into
+/// one file: started once their SIGINT trap is set, signalled when SIGINT arrives, stopped after
+/// lingering a while (a stage's exit work), right before they exit.
+class StopStamps {
+ public:
+  explicit StopStamps(const std::filesystem::path& dir) : script_(dir / "stamp.sh"), stamps_(dir / "stamps.txt") {
+    // perl reads the monotonic clock (scripts/install-deps); the foreground sleep dies with the
+    // SIGINT sent to the whole process group, so the trap runs at once.
+    writeFile(script_, R"sh(name=$1 linger=$2 stamps=$3
+stamp() {
+  echo "$name $1 at $(perl -MTime::HiRes=clock_gettime,CLOCK_MONOTONIC -e 'printf("%.0f", clock_gettime(CLOCK_MONOTONIC) * 1e9)')" >>"$stamps"
+}
+trap 'stamp signalled; sleep "$linger"; stamp stopped; exit 0' INT
+stamp started
+sleep 1000
+)sh");
+  }
+
+  /// A group file command item: `name` at `start_order`, lingering `linger` seconds after SIGINT.
+  std::string command(const std::string& name, int start_order, const std::string& linger) const {
+    return "  - name: " + name + "\n    exec: sh\n    args: [\"" + script_.string() + "\", " + name + ", \"" + linger +
+           "\", \"" + stamps_.string() + "\"]\n    start_order: " + std::to_string(start_order) + "\n";
+  }
+
+  /// The stamp of `name`'s `event`, if written.
+  std::optional<int64_t> at(const std::string& name, const std::string& event) const {
+    std::istringstream lines(readFile(stamps_));
+    std::string who, what, word;
+    int64_t ns = 0;
+    while (lines >> who >> what >> word >> ns)
+      if (who == name && what == event) return ns;
+    return std::nullopt;
+  }
+
+  /// Waits until every one of `names` has set its trap.
+  bool waitUntilStarted(const std::vector<std::string>& names, std::chrono::seconds timeout) const {
+    for (const auto end = Clock::now() + timeout; Clock::now() < end; std::this_thread::sleep_for(20ms))
+      if (std::all_of(names.begin(), names.end(), [&](const std::string& n) { return at(n, "started").has_value(); }))
+        return true;
+    return false;
+  }
+
+  std::string text() const { return readFile(stamps_); }
+
+ private:
+  std::filesystem::path script_, stamps_;
+};
+
+}  // namespace
+
+TEST(Launcher, StopsLevelsInReverseStartOrderEachWhenTheLevelAboveHasExited) {
+  const auto dir = launcherScratch("stop-order");
+  StopStamps stamps(dir);
+  // In file order the levels are mixed: the order comes from start_order alone.
+  const std::string groups = writeFile(dir / "stop-order.yaml", "name: stop-order-test\nstop_signal: SIGINT\n"
+                                       "stop_grace: 30\ncommands:\n" + stamps.command("middle-a", 0, "0.3") +
+                                       stamps.command("recorder", -10, "0") + stamps.command("player", 10, "0.5") +
+                                       stamps.command("middle-b", 0, "0.3"));
+  Launcher launcher(dir, groups);
+  ASSERT_TRUE(stamps.waitUntilStarted({"middle-a", "recorder", "player", "middle-b"}, 15s)) << launcher.output();
+
+  launcher.process().signal(SIGINT);
+  ASSERT_TRUE(launcher.process().waitFor(30s)) << launcher.output();
+  EXPECT_EQ(launcher.process().exitCode(), 0) << launcher.output();
+
+  std::map<std::string, std::pair<int64_t, int64_t>> span;  // name -> (signalled, stopped)
+  for (const std::string name : {"player", "middle-a", "middle-b", "recorder"}) {
+    const auto signalled = stamps.at(name, "signalled"), stopped = stamps.at(name, "stopped");
+    ASSERT_TRUE(signalled && stopped) << name << " did not stop by its trap\n" << stamps.text() << launcher.output();
+    span[name] = {*signalled, *stopped};
+  }
+  const std::string why = stamps.text() + launcher.output();
+  // Each level is signalled only after every process of the level above has exited...
+  EXPECT_GT(span["middle-a"].first, span["player"].second) << why;
+  EXPECT_GT(span["middle-b"].first, span["player"].second) << why;
+  EXPECT_GT(span["recorder"].first, span["middle-a"].second) << why;
+  EXPECT_GT(span["recorder"].first, span["middle-b"].second) << why;
+  // ...and the commands of one level are signalled together: each before the other has stopped.
+  EXPECT_LT(span["middle-a"].first, span["middle-b"].second) << why;
+  EXPECT_LT(span["middle-b"].first, span["middle-a"].second) << why;
+
+  const std::string out = launcher.output();
+  const size_t top = out.find("[launch] stopping start_order 10: player\n");
+  const size_t middle = out.find("[launch] stopping start_order 0: middle-a middle-b\n");
+  const size_t bottom = out.find("[launch] stopping start_order -10: recorder\n");
+  ASSERT_NE(top, std::string::npos) << out;
+  ASSERT_NE(middle, std::string::npos) << out;
+  ASSERT_NE(bottom, std::string::npos) << out;
+  EXPECT_LT(top, middle) << out;
+  EXPECT_LT(middle, bottom) << out;
+  for (const std::string name : {"player", "middle-a", "middle-b", "recorder"})
+    EXPECT_NE(out.find("[launch] " + name + " ended: exit 0"), std::string::npos) << out;
+}
+
+TEST(Launcher, SecondSignalKillsEveryLevelAtOnce) {
+  const auto dir = launcherScratch("second-signal");
+  StopStamps stamps(dir);
+  // The upper level would linger a minute on SIGINT, and its grace is longer still: only the
+  // second signal can end the launcher within the test's time.
+  const std::string groups = writeFile(dir / "second-signal.yaml", "name: second-signal-test\nstop_signal: SIGINT\n"
+                                       "stop_grace: 120\ncommands:\n" + stamps.command("slow", 10, "60") +
+                                       stamps.command("waiting", 0, "0"));
+  Launcher launcher(dir, groups);
+  ASSERT_TRUE(stamps.waitUntilStarted({"slow", "waiting"}, 15s)) << launcher.output();
+  const std::vector<polarslam::ProcStat> tree = descendantsOf(launcher.process().pid());
+  ASSERT_GE(tree.size(), 4u) << "two shells and their sleeps";
+
+  launcher.process().signal(SIGINT);
+  for (auto end = Clock::now() + 10s; Clock::now() < end && !stamps.at("slow", "signalled");)
+    std::this_thread::sleep_for(20ms);
+  ASSERT_TRUE(stamps.at("slow", "signalled").has_value()) << launcher.output();
+  std::this_thread::sleep_for(1s);  // well past the window in which a repeat counts as the same stop
+  ASSERT_TRUE(launcher.process().running()) << launcher.output();
+  launcher.process().signal(SIGINT);
+  ASSERT_TRUE(launcher.process().waitFor(20s)) << "the second SIGINT did not kill everything\n" << launcher.output();
+
+  const std::string out = launcher.output();
+  EXPECT_NE(out.find("[launch] received SIGINT again: killing everything now"), std::string::npos) << out;
+  EXPECT_NE(out.find("[launch] slow ended: killed by SIGKILL"), std::string::npos) << out;
+  EXPECT_NE(out.find("[launch] waiting ended: killed by SIGKILL"), std::string::npos) << out;
+  EXPECT_FALSE(stamps.at("slow", "stopped").has_value()) << stamps.text();
+  EXPECT_FALSE(stamps.at("waiting", "signalled").has_value()) << "the lower level got its SIGINT\n" << stamps.text();
+  for (const auto& p : tree) EXPECT_FALSE(processExists(p.pid)) << "pid " << p.pid << " (" << p.comm << ") survived";
+}
+
 TEST(Launcher, BadGroupFileGivesOneErrorNamingFileAndLine) {
   const auto dir = launcherScratch("bad");
   const std::string groups = writeFile(dir / "bad.yaml", "name: bad\ncommands:\n  - name: a\n    exce: sleep\n");

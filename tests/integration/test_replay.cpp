@@ -10,11 +10,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 
 #include "child_process.hpp"
 #include "common/lcm_log.hpp"
+#include "polarslam/process_status_t.hpp"
 
 using namespace std::chrono_literals;
 using polarslam::testing::binPath;
@@ -30,6 +32,29 @@ std::map<std::string, long> channelCounts(const std::string& log_path) {
   polarslam::LogEvent event;
   while (reader.next(event)) ++counts[event.channel];
   return counts;
+}
+
+/// Where, in a log's message order, each polarslam process reported "stopped", and where the last
+/// message of each channel is.
+struct LogOrder {
+  std::map<std::string, long> stopped, last;
+  static long at(const std::map<std::string, long>& where, const std::string& key) {
+    const auto it = where.find(key);
+    return it == where.end() ? -1 : it->second;
+  }
+};
+
+LogOrder logOrder(const std::string& log_path) {
+  LogOrder order;
+  polarslam::LcmLogReader reader(log_path);
+  polarslam::LogEvent event;
+  polarslam::process_status_t status;
+  for (long i = 0; reader.next(event); ++i) {
+    order.last[event.channel] = i;
+    if (event.channel == "PROCESS_STATUS" && event.decode(status) && status.state == "stopped")
+      order.stopped[status.name] = i;
+  }
+  return order;
 }
 
 nlohmann::json readJson(const std::filesystem::path& path) {
@@ -147,6 +172,14 @@ TEST(Replay, LiveRunOfTheDefaultLogMatchesTheOfflineRunAndRecordsItsGrids) {
   EXPECT_GE(occupiedAgreement(offline_map, live_map), 0.95);
   EXPECT_GE(occupiedAgreement(live_map, offline_map), 0.95);
   EXPECT_TRUE(std::filesystem::exists(run_dir / "grid" / "map.pgm"));
+  // The recorder stops last (reverse start order): it kept what each stage published on its way
+  // out, down to the final map and graph the estimators publish after they report "stopped".
+  const LogOrder order = logOrder(recorded);
+  for (const std::string stage : {"polarslam-features", "polarslam-fusion", "polarslam-ekf-slam", "polarslam-psm-slam",
+                                  "polarslam-grid", "polarslam-grid-psm"})
+    EXPECT_TRUE(order.stopped.count(stage)) << stage << " stopped after the recorder";
+  EXPECT_GT(order.at(order.last, "SLAM_MAP"), order.at(order.stopped, "polarslam-ekf-slam")) << "no final SLAM_MAP";
+  EXPECT_GT(order.at(order.last, "PSM_SLAM_GRAPH"), order.at(order.stopped, "polarslam-psm-slam")) << "no final graph";
 
   // The recorded log is an ordinary LCM log: lcm-logplayer plays it again, to its end.
   EXPECT_EQ(runToEnd({"lcm-logplayer", "--speed", "50", recorded}, dir / "replay-again.out", 60s), 0);

@@ -200,6 +200,21 @@ TEST(GroupFile, ShippedGroupFilesLoad) {
   EXPECT_EQ(selectCommands(pipeline, "", "robot").size() + selectCommands(pipeline, "", "base").size(), 7u);
 }
 
+// Consumers start before the stages feeding them, so that none misses the first messages; the
+// launcher stops in the reverse order, so that each still hears its feeders' last messages.
+TEST(GroupFile, ShippedGroupsStartConsumersFirstSoTheyStopLast) {
+  const std::string groups = std::string(POLARSLAM_SOURCE_DIR) + "/config/groups/";
+  const auto namesInStartOrder = [&](const std::string& file) {
+    std::vector<std::string> names;
+    for (const auto& c : selectCommands(loadGroupFile(groups + file, {}), "", "")) names.push_back(c.name);
+    return names;
+  };
+  EXPECT_EQ(namesInStartOrder("pipeline.yaml"),
+            (std::vector<std::string>{"grid", "ekf-slam", "psm", "psm-slam", "fusion", "features", "sim"}));
+  EXPECT_EQ(namesInStartOrder("replay.yaml"),
+            (std::vector<std::string>{"recorder", "grid", "ekf-slam", "psm-slam", "fusion", "features", "player"}));
+}
+
 TEST(GroupFile, ExpandsVariables) {
   const Environment vars{{"A", "1"}, {"LONG_NAME", "two"}};
   EXPECT_EQ(expandVariables("x${A}y${LONG_NAME}z$A", vars, "w"), "x1ytwoz$A");

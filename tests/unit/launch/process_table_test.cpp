@@ -109,6 +109,31 @@ TEST(ProcessTable, ShutdownCancelsPendingStarts) {
   EXPECT_TRUE(table.dueToStart(t0 + 10s).empty());
 }
 
+TEST(ProcessTable, StopsTheHighestStartOrderFirstAndEqualOnesTogether) {
+  const auto ordered = [](const std::string& name, int start_order) {
+    CommandSpec c = command(name);
+    c.start_order = start_order;
+    return c;
+  };
+  // As group files give them: sorted by start_order, ties in file order.
+  ProcessTable table({ordered("recorder", -10), ordered("ekf", 0), ordered("psm", 0), ordered("features", 2),
+                      ordered("player", 10)},
+                     t0);
+  for (size_t i = 0; i < 4; ++i) table.started(i, static_cast<int>(100 + i), t0);
+  table.cancelPendingStarts();  // the player never started: nothing of start_order 10 runs
+  EXPECT_EQ(table.running(), (std::vector<size_t>{0, 1, 2, 3}));
+  EXPECT_EQ(table.nextToStop(), std::vector<size_t>{3});
+  table.stopping(3, t0);
+  EXPECT_EQ(table.nextToStop(), (std::vector<size_t>{1, 2}));
+  table.stopping(1, t0);
+  EXPECT_EQ(table.nextToStop(), std::vector<size_t>{2});  // its partner is already stopping
+  table.stopping(2, t0);
+  EXPECT_EQ(table.nextToStop(), std::vector<size_t>{0});
+  table.stopping(0, t0);
+  EXPECT_TRUE(table.nextToStop().empty());
+  EXPECT_TRUE(table.running().empty());
+}
+
 TEST(ProcessTable, FailedStartIsKeptWithItsReason) {
   ProcessTable table({command("ghost"), command("b")}, t0);
   table.startFailed(0, "executable 'ghost' not found");
