@@ -1,5 +1,7 @@
 #include "grid/grid_files.hpp"
 
+#include <octomap/OcTree.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <limits>
@@ -19,17 +21,15 @@ std::string formatNumber(double v) {
   return buf;
 }
 
-void writeOctree(const std::string& path, const octomap::OcTree& tree, bool binary) {
-  std::ostringstream out(std::ios::binary);
-  bool ok = false;
-  if (binary) {
-    octomap::OcTree copy(tree);  // writeBinary converts the tree it writes in place
-    ok = copy.writeBinary(out);
-  } else {
-    ok = tree.write(out);
-  }
-  if (!ok || !out) throw std::runtime_error("cannot serialise octree for '" + path + "'");
-  writeFileAtomically(path, out.str());
+/// map.ot (full probabilities) and map.bt (maximum likelihood). writeBinary converts the tree it
+/// writes in place, so the .ot goes first.
+void writeOctrees(const std::string& ot_path, const std::string& bt_path, octomap::OcTree& tree) {
+  std::ostringstream ot(std::ios::binary);
+  if (!tree.write(ot) || !ot) throw std::runtime_error("cannot serialise octree for '" + ot_path + "'");
+  std::ostringstream bt(std::ios::binary);
+  if (!tree.writeBinary(bt) || !bt) throw std::runtime_error("cannot serialise octree for '" + bt_path + "'");
+  writeFileAtomically(ot_path, ot.str());
+  writeFileAtomically(bt_path, bt.str());
 }
 
 }  // namespace
@@ -87,8 +87,7 @@ GridFiles writeGridFiles(const std::string& dir, const OccupancyGrid& grid, cons
   files.pgm = (d / (base_name + ".pgm")).string();
   files.yaml = (d / (base_name + ".yaml")).string();
   files.png = (d / (base_name + ".png")).string();
-  writeOctree(files.ot, grid.tree(), false);
-  writeOctree(files.bt, grid.tree(), true);
+  writeOctrees(files.ot, files.bt, *grid.toOcTree());
   // The image first: a reader that sees the new YAML finds the image it names complete.
   writePgm(files.pgm, toMapServerImage(slice));
   writeFileAtomically(files.yaml, mapServerYaml(slice, base_name + ".pgm"));

@@ -1,6 +1,11 @@
 #include "common/lcm_convert.hpp"
 
+#include <zlib.h>
+
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 
 namespace polarslam {
 namespace {
@@ -344,6 +349,105 @@ std::string fromLcm(const polarslam::scan_anchors_t& msg, ScanAnchors& out) {
     anchors.anchors.push_back(a);
   }
   out = std::move(anchors);
+  return {};
+}
+
+namespace {
+
+constexpr int8_t kUnknownCell = -1;
+
+uint8_t cellOf(float probability) {
+  if (std::isnan(probability)) return static_cast<uint8_t>(kUnknownCell);
+  return static_cast<uint8_t>(std::lround(std::clamp(100.0 * probability, 0.0, 100.0)));
+}
+
+std::vector<uint8_t> deflateCells(const std::vector<uint8_t>& cells) {
+  uLongf size = compressBound(static_cast<uLong>(cells.size()));
+  std::vector<uint8_t> out(size);
+  // Fastest level: grids are mostly long runs of equal cells, which it already squeezes well.
+  if (compress2(out.data(), &size, cells.data(), static_cast<uLong>(cells.size()), Z_BEST_SPEED) != Z_OK)
+    throw std::runtime_error("grid map: zlib compression failed");
+  out.resize(size);
+  return out;
+}
+
+/// Inflates `data` into exactly `count` cells; the reason when it is not such a zlib stream.
+std::string inflateCells(const std::vector<uint8_t>& data, size_t count, std::vector<uint8_t>& cells) {
+  cells.assign(std::max<size_t>(count, 1), 0);
+  uLongf produced = count;
+  uLong consumed = static_cast<uLong>(data.size());
+  const int status = uncompress2(cells.data(), &produced, data.data(), &consumed);
+  if (status == Z_BUF_ERROR) return "grid map: zlib data inflates to more than width*height cells";
+  if (status == Z_MEM_ERROR) return "grid map: out of memory inflating the cells";
+  if (status != Z_OK) return "grid map: bad zlib data (corrupt or truncated)";
+  if (produced != count) return "grid map: zlib data inflates to fewer than width*height cells";
+  if (consumed != data.size()) return "grid map: bytes after the end of the zlib stream";
+  cells.resize(count);
+  return {};
+}
+
+std::string checkGridHeader(const polarslam::grid_map_t& msg) {
+  if (!countMatches(msg.data, msg.num_bytes)) return "grid map: num_bytes disagrees with data";
+  if (!std::isfinite(msg.resolution) || !(msg.resolution > 0.0)) return "grid map: resolution must be finite and positive";
+  if (!finite({msg.origin[0], msg.origin[1], msg.origin[2]})) return "grid map: non-finite origin";
+  if (msg.origin[2] != 0.0) return "grid map: rotated grids (origin yaw != 0) are not supported";
+  if (msg.width < 0 || msg.height < 0) return "grid map: negative width or height";
+  if ((msg.width == 0) != (msg.height == 0)) return "grid map: width and height must both be zero or both positive";
+  if (int64_t{msg.width} * msg.height > kMaxGridMapCells)
+    return "grid map: " + std::to_string(msg.width) + " x " + std::to_string(msg.height) + " cells, more than the " +
+           std::to_string(kMaxGridMapCells) + " accepted";
+  return {};
+}
+
+}  // namespace
+
+polarslam::grid_map_t toLcmGridMap(const GridSlice& slice, int64_t utime, int64_t seq, const std::string& source,
+                                   int scans, bool compress) {
+  polarslam::grid_map_t msg;
+  msg.utime = utime;
+  msg.seq = seq;
+  msg.frame = "map";
+  msg.resolution = slice.resolution;
+  msg.origin[0] = slice.origin.x();
+  msg.origin[1] = slice.origin.y();
+  msg.origin[2] = 0.0;
+  msg.width = slice.width;
+  msg.height = slice.height;
+  msg.scans = scans;
+  msg.source = source;
+  std::vector<uint8_t> cells(slice.probability.size());
+  std::transform(slice.probability.begin(), slice.probability.end(), cells.begin(), cellOf);
+  msg.encoding = compress ? polarslam::grid_map_t::ENCODING_ZLIB : polarslam::grid_map_t::ENCODING_RAW;
+  msg.data = compress ? deflateCells(cells) : std::move(cells);
+  msg.num_bytes = static_cast<int32_t>(msg.data.size());
+  return msg;
+}
+
+std::string fromLcm(const polarslam::grid_map_t& msg, GridSlice& out) {
+  if (std::string why = checkGridHeader(msg); !why.empty()) return why;
+  const auto count = static_cast<size_t>(int64_t{msg.width} * msg.height);
+  std::vector<uint8_t> inflated;
+  const std::vector<uint8_t>* cells = &msg.data;
+  if (msg.encoding == polarslam::grid_map_t::ENCODING_ZLIB) {
+    if (std::string why = inflateCells(msg.data, count, inflated); !why.empty()) return why;
+    cells = &inflated;
+  } else if (msg.encoding != polarslam::grid_map_t::ENCODING_RAW) {
+    return "grid map: unknown encoding " + std::to_string(msg.encoding);
+  } else if (msg.data.size() != count) {
+    return "grid map: " + std::to_string(msg.data.size()) + " bytes for " + std::to_string(count) + " cells";
+  }
+  GridSlice slice;
+  slice.resolution = msg.resolution;
+  slice.origin = Vec2(msg.origin[0], msg.origin[1]);
+  slice.width = msg.width;
+  slice.height = msg.height;
+  slice.probability.resize(count);
+  for (size_t i = 0; i < count; ++i) {
+    const auto value = static_cast<int8_t>((*cells)[i]);
+    if (value < kUnknownCell || value > 100) return "grid map: cell value " + std::to_string(value) + " outside -1..100";
+    slice.probability[i] = value == kUnknownCell ? std::numeric_limits<float>::quiet_NaN() : 0.01f * value;
+  }
+  out = std::move(slice);
   return {};
 }
 

@@ -1,14 +1,17 @@
 #pragma once
 // Conversions between LCM messages and core structs. Conversions from LCM validate array
 // sizes against their counts and return an error string (empty = ok) instead of trusting them.
+#include <cstdint>
 #include <string>
 
 #include "geometry/features.hpp"
+#include "grid/grid_slice.hpp"
 #include "laser/laser_scan.hpp"
 #include "odometry/odometry_reading.hpp"
 #include "slam/feature_map.hpp"
 #include "sonar/sonar_targets.hpp"
 #include "polarslam/features_t.hpp"
+#include "polarslam/grid_map_t.hpp"
 #include "polarslam/laser_scan_t.hpp"
 #include "polarslam/odometry_t.hpp"
 #include "polarslam/pose_t.hpp"
@@ -40,6 +43,20 @@ std::string fromLcm(const polarslam::slam_map_t& msg, FeatureMap& out);
 /// SCAN_ANCHORS. fromLcm checks counts, kinds and finiteness.
 polarslam::scan_anchors_t toLcm(const ScanAnchors& anchors, int64_t seq = 0);
 std::string fromLcm(const polarslam::scan_anchors_t& msg, ScanAnchors& out);
+
+/// Most cells a grid_map_t may hold (64 Mi: e.g. 400 m × 400 m at 5 cm). fromLcm rejects bigger
+/// grids before allocating: a few kB of zlib data could otherwise inflate to gigabytes.
+inline constexpr int64_t kMaxGridMapCells = int64_t{1} << 26;
+
+/// grid_map_t of a slice in the map frame: unknown cells -1, the others their occupancy
+/// probability in whole percent; `compress` deflates the cells with zlib. `source` and `scans`
+/// tell a viewer what the grid was built from ("ekf-anchors" / "psm-graph", scans ray-cast).
+polarslam::grid_map_t toLcmGridMap(const GridSlice& slice, int64_t utime, int64_t seq, const std::string& source,
+                                   int scans, bool compress);
+/// Checks sizes against width × height (and kMaxGridMapCells), resolution, origin, encoding, the
+/// zlib stream and every cell value. Unknown cells become NaN, the others percent / 100; the
+/// slice keeps its default thresholds.
+std::string fromLcm(const polarslam::grid_map_t& msg, GridSlice& out);
 
 template <int N>
 void copyMatrix(const Eigen::Matrix<double, N, N>& m, double* out) {

@@ -15,6 +15,7 @@
 #include <exception>
 
 #include "polarslam/features_t.hpp"
+#include "polarslam/grid_map_t.hpp"
 #include "polarslam/laser_scan_t.hpp"
 #include "polarslam/pose_t.hpp"
 #include "polarslam/sonar_targets_t.hpp"
@@ -81,6 +82,14 @@ inline bool arrayCountsFit(const features_t&, const uint8_t* data, size_t size) 
   return skipArray(data, size, pos, encodedBytes<line_feature_t>()) &&
          skipArray(data, size, pos, encodedBytes<corner_feature_t>()) &&
          skipArray(data, size, pos, encodedBytes<point_feature_t>());
+}
+
+inline bool arrayCountsFit(const grid_map_t&, const uint8_t* data, size_t size) {
+  using namespace lcm_decode_detail;
+  size_t pos = kHashBytes + 2 * 8;  // utime seq, then the frame string
+  if (!skipString(data, size, pos)) return false;
+  pos += 8 + 3 * 8 + 4 + 4 + 1 + 4;  // resolution origin[3] width height encoding scans
+  return skipString(data, size, pos) && skipArray(data, size, pos, 1);
 }
 
 /// Decodes `size` bytes at `data` into `msg`; false when they are not a valid MsgT.

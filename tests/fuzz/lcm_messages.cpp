@@ -23,7 +23,7 @@ void decodeAndConvert(const uint8_t* data, size_t size) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;
-  const uint8_t kind = data[0] % 5;
+  const uint8_t kind = data[0] % 6;
   ++data;
   --size;
   switch (kind) {
@@ -31,7 +31,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     case 1: decodeAndConvert<polarslam::odometry_t, polarslam::OdometryReading>(data, size); break;
     case 2: decodeAndConvert<polarslam::sonar_targets_t, polarslam::SonarScan>(data, size); break;
     case 3: decodeAndConvert<polarslam::pose_t, polarslam::PoseStamped>(data, size); break;
-    default: decodeAndConvert<polarslam::features_t, polarslam::FeatureSet>(data, size); break;
+    case 4: decodeAndConvert<polarslam::features_t, polarslam::FeatureSet>(data, size); break;
+    default: decodeAndConvert<polarslam::grid_map_t, polarslam::GridSlice>(data, size); break;
   }
   return 0;
 }

@@ -5,6 +5,7 @@
 //     collision-free PLANNED_PATH; a malformed message is rejected and counted.
 //  2. polarslam-sim --path-channel follows a PLANNED_PATH to its goal and stops there.
 #include <gtest/gtest.h>
+#include <octomap/OcTree.h>
 #include <yaml-cpp/yaml.h>
 
 #include <filesystem>

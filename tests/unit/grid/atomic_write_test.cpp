@@ -1,6 +1,7 @@
 // A writer killed at any moment never leaves a partial map file: each name holds either nothing
 // or a complete file (temp file + rename).
 #include <gtest/gtest.h>
+#include <octomap/OcTree.h>
 #include <sys/wait.h>
 #include <unistd.h>
 

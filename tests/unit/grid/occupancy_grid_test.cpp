@@ -1,6 +1,7 @@
 // Occupancy from exact scans against the walls they were cast from; map files read back with
 // OctoMap's own reader and parsed as map_server does.
 #include <gtest/gtest.h>
+#include <octomap/OcTree.h>
 #include <yaml-cpp/yaml.h>
 
 #include <filesystem>
