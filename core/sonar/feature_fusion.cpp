@@ -203,7 +203,6 @@ bool FeatureFusion::addSonar(const SonarScan& scan) {
     return false;
   }
   ++stats_.sonar_scans;
-  latest_sonar_[scan.sensor_id] = scan;
   const auto at = std::upper_bound(pending_sonar_.begin(), pending_sonar_.end(), scan.utime,
                                    [](int64_t t, const SonarScan& s) { return t < s.utime; });
   pending_sonar_.insert(at, scan);
@@ -221,12 +220,10 @@ std::vector<FeatureSet> FeatureFusion::takeReady() {
 void FeatureFusion::flush() { process(true); }
 
 bool FeatureFusion::laserReady(const FeatureSet& laser) const {
-  if (!params_.use_sonar) return true;
-  if (stream_time_ - laser.utime >= seconds(params_.sonar_wait_s)) return true;
-  // Every array seen so far has reported a cycle at or after the scan.
-  for (const auto& [id, latest] : latest_sonar_)
-    if (latest.utime < laser.utime) return false;
-  return true;
+  // Stream time alone decides, never which messages happen to have arrived: live, the laser
+  // features come from another process and reach this stage after the sonar cycles of their own
+  // time, offline before them, and both must fuse the same cycles.
+  return !params_.use_sonar || stream_time_ - laser.utime >= seconds(params_.sonar_wait_s);
 }
 
 void FeatureFusion::process(bool flushing) {

@@ -10,8 +10,9 @@
 // through alone.
 //
 // FeatureFusion turns the LASER_FEATURES, SONAR, LASER and ODOMETRY streams into one FEATURES
-// stream in the base frame: each laser feature set waits (up to sonar_wait_s of stream time) for
-// the sonar cycles around its time, the sonar features are moved to the laser scan's time with the
+// stream in the base frame: each laser feature set waits sonar_wait_s of stream time for the
+// sonar cycles around its time (stream time alone decides, so that the order in which the
+// streams happen to arrive changes nothing), the sonar features are moved to the laser scan's time with the
 // odometry (and its covariance), checked against the raw laser scan (sonar_selection.hpp), and
 // fused. Sonar cycles with no laser scan near them are passed on alone, so sonar information is
 // never lost; output is always in time order.
@@ -123,7 +124,6 @@ class FeatureFusion {
   std::deque<FeatureSet> pending_laser_;
   std::deque<SonarScan> pending_sonar_;
   std::deque<LaserScan> raw_scans_;  ///< normalised
-  std::map<int, SonarScan> latest_sonar_;
   std::vector<FeatureSet> ready_;
   int64_t stream_time_ = std::numeric_limits<int64_t>::min();
   int64_t emitted_until_ = std::numeric_limits<int64_t>::min();

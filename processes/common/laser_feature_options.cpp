@@ -22,12 +22,6 @@ void LaserFeatureOptions::add(CLI::App& app) {
   app.add_flag("--no-corners", no_corners_, "extract lines only");
 }
 
-LaserFeatureConfig LaserFeatureOptions::resolve() const {
-  LaserFeatureConfig c = config_.empty() ? LaserFeatureConfig{} : loadLaserFeatureConfig(config_);
-  applyOverrides(c);
-  return c;
-}
-
 FeaturePipelineConfig LaserFeatureOptions::resolvePipeline(SlamSensors sensors) const {
   FeaturePipelineConfig c = loadFeaturePipelineConfig(config_, sensors);
   applyOverrides(c.laser);

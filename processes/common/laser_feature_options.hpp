@@ -19,10 +19,8 @@ class LaserFeatureOptions {
  public:
   /// Adds --config and the error-model overrides to `app`.
   void add(CLI::App& app);
-  /// The configuration: the YAML file (if any), then every override given on the command line.
-  LaserFeatureConfig resolve() const;
-  /// The EKF pipeline's configuration from the same file (polarslam-features), overrides applied
-  /// to its laser feature part.
+  /// The EKF pipeline's configuration from the YAML file (the default robot's without one), then
+  /// every override given on the command line applied to its laser feature part.
   FeaturePipelineConfig resolvePipeline(SlamSensors sensors) const;
 
  private:

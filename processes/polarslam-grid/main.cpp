@@ -46,7 +46,7 @@ struct Channels {
 struct Options {
   GridSource source = GridSource::Ekf;
   std::string out_dir = "grid";
-  double period = 1.0;         ///< s between rebuilds (and GRID_MAP messages) while the map changes
+  double period = 1.0;         ///< s between rebuilds (and GRID_MAP messages) while the map changes; 0 = on request
   double write_period = 10.0;  ///< s between file writes (0 = only on GRID_REQUEST and exit)
   double goal_tolerance = 0.2;
   bool compress = true;
@@ -149,7 +149,7 @@ class GridNode {
   void tick() {
     collectBuild();
     const auto now = Clock::now();
-    if (changed() && now >= next_build_) {
+    if (o_.period > 0.0 && changed() && now >= next_build_) {
       const bool write = o_.write_period > 0.0 && now >= next_write_;
       if (startBuild(write ? o_.out_dir : "")) {
         next_build_ = now + secondsToDuration(o_.period);
@@ -403,8 +403,8 @@ int main(int argc, char** argv) {
   app.add_option("--config", config, "psm-slam: the PSM SLAM file (its grid_* keys), e.g. config/psm-slam.yaml")
       ->check(CLI::ExistingFile);
   app.add_option("--out", o.out_dir, "folder for map.{ot,bt,pgm,yaml,png}")->capture_default_str();
-  app.add_option("--period", o.period, "s between rebuilds and GRID_MAP messages while the map changes")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--period", o.period, "s between rebuilds and GRID_MAP messages while the map changes (0 = only on GRID_REQUEST)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--write-period", o.write_period, "s between file writes (0 = only on GRID_REQUEST and exit)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--resolution", o.grid.grid.resolution, "ekf: m per cell")->check(CLI::Range(0.005, 5.0))

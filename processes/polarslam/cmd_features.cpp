@@ -1,13 +1,13 @@
 // polarslam features: laser features of every scan in an LCM log, one JSON object per line.
 //   polarslam features --log run.lcmlog --out features.jsonl [--channel LASER] [--config FILE]
-// The extraction is the live process's (polarslam-features): same core code, same options.
+// The extraction is the live process's (polarslam-features): the same LaserFeatureStage, fed
+// LASER, SONAR (break hints, fused sensors) and ODOMETRY in log order, with the same options.
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <optional>
 #include <stdexcept>
 
 #include "command_registry.hpp"
@@ -20,7 +20,7 @@ namespace polarslam {
 namespace {
 
 struct FeaturesCommand {
-  std::string log, out, channel = "LASER", odometry_channel = "ODOMETRY";
+  std::string log, out, channel = "LASER", odometry_channel = "ODOMETRY", sonar_channel = "SONAR", sensors = "fused";
   LaserFeatureOptions options;
 };
 
@@ -56,17 +56,16 @@ nlohmann::ordered_json scanJson(const FeatureSet& f) {
   nlohmann::ordered_json lines = nlohmann::ordered_json::array(), corners = nlohmann::ordered_json::array();
   for (const LineFeature& l : f.lines) lines.push_back(lineJson(l));
   for (const CornerFeature& c : f.corners) corners.push_back(cornerJson(c));
-  return {{"utime", f.utime}, {"seq", f.seq}, {"lines", lines}, {"corners", corners}};
+  return {{"utime", f.utime}, {"seq", f.seq}, {"lines", lines}, {"corners", corners}, {"break_hints", f.break_hints}};
 }
 
 void runFeatures(const FeaturesCommand& cmd) {
-  const LaserFeatureExtractor extractor(cmd.options.resolve());
+  LaserFeatureStage stage(cmd.options.resolvePipeline(parseSlamSensors(cmd.sensors)));
   LcmLogReader reader(cmd.log);
   const std::string tmp = cmd.out + ".tmp";
   std::ofstream out(tmp);
   if (!out) throw std::runtime_error("cannot write " + tmp);
   ProgressBar progress("features");
-  std::optional<OdometryReading> odometry;
   long scans = 0, bad = 0, lines = 0, corners = 0;
   LogEvent event;
   while (reader.next(event)) {
@@ -74,7 +73,13 @@ void runFeatures(const FeaturesCommand& cmd) {
     if (!cmd.odometry_channel.empty() && event.channel == cmd.odometry_channel) {
       polarslam::odometry_t msg;
       OdometryReading reading;
-      if (event.decode(msg) && fromLcm(msg, reading).empty()) odometry = reading;
+      if (event.decode(msg) && fromLcm(msg, reading).empty()) stage.addOdometry(reading);
+      continue;
+    }
+    if (stage.usesSonar() && event.channel == cmd.sonar_channel) {
+      polarslam::sonar_targets_t msg;
+      SonarScan sonar;
+      if (event.decode(msg) && fromLcm(msg, sonar).empty()) stage.addSonar(sonar);
       continue;
     }
     if (event.channel != cmd.channel) continue;
@@ -84,10 +89,7 @@ void runFeatures(const FeaturesCommand& cmd) {
       ++bad;
       continue;
     }
-    SensorMotion motion;
-    if (odometry && std::llabs(odometry->utime - scan.utime) < 500000)
-      motion = sensorMotionFromBaseTwist(scan.laser_pose, odometry->v, odometry->omega);
-    const FeatureSet features = extractor.extract(scan, {}, motion);
+    const FeatureSet features = stage.extract(scan);
     out << scanJson(features).dump() << '\n';
     ++scans;
     lines += static_cast<long>(features.lines.size());
@@ -110,6 +112,10 @@ void setupFeatures(CLI::App& sub) {
   sub.add_option("--channel", cmd->channel, "laser channel")->capture_default_str();
   sub.add_option("--odometry-channel", cmd->odometry_channel, "speed for the motion error term; \"\" = none")
       ->capture_default_str();
+  sub.add_option("--sonar-channel", cmd->sonar_channel, "sonar cycles for break hints (fused sensors)")
+      ->capture_default_str();
+  sub.add_option("--sensors", cmd->sensors, "laser | sonar | fused (fused: sonar break hints)")
+      ->check(CLI::IsMember({"laser", "sonar", "fused"}))->capture_default_str();
   cmd->options.add(sub);
   sub.callback([cmd] { runFeatures(*cmd); });
 }

@@ -13,9 +13,11 @@
 #include "child_process.hpp"
 #include "common/lcm_convert.hpp"
 #include "common/path_messages.hpp"
+#include "common/pose_graph_message.hpp"
 #include "common/process_context.hpp"
 #include "grid/anchor_model.hpp"
 #include "polarslam/goal_t.hpp"
+#include "polarslam/grid_map_t.hpp"
 #include "polarslam/grid_request_t.hpp"
 #include "polarslam/grid_status_t.hpp"
 #include "polarslam/process_status_t.hpp"
@@ -187,6 +189,76 @@ TEST(GridProcess, RegeneratesWritesTheGridAndPlansToAGoal) {
   grid.signal(SIGINT);
   ASSERT_TRUE(grid.waitFor(10s));
   EXPECT_EQ(grid.exitCode(), 0);
+  std::filesystem::remove_all(dir);
+}
+
+// --source psm-slam: reference scans (LASER paired with PSM_SLAM_ANCHORS, in either order) placed
+// by PSM_SLAM_GRAPH; GRID_MAP follows every graph change, and the last graph on exit wins.
+TEST(GridProcess, GridFromThePoseGraphFollowsTheGraphOnGridMap) {
+  lcm::LCM lcm(resolveLcmUrl(""));
+  ASSERT_TRUE(lcm.good()) << "LCM UDP multicast unavailable: run the tests through scripts/with-netns";
+  const auto dir = std::filesystem::temp_directory_path() / ("polarslam-it-grid-psm-" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::vector<GridSlice> grids;
+  struct GridListener {
+    std::vector<GridSlice>* grids;
+    void onGrid(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      polarslam::grid_map_t msg;
+      GridSlice slice;
+      if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) >= 0 && fromLcm(msg, slice).empty())
+        grids->push_back(slice);
+    }
+  } listener{&grids};
+  lcm.subscribe("GRID_MAP", &GridListener::onGrid, &listener);
+  ChildProcess grid({binPath("polarslam-grid"), "--source", "psm-slam", "--out", (dir / "maps").string(), "--period",
+                     "0.2", "--config", sourcePath("config/psm-slam.yaml")},
+                    (dir / "grid.log").string());
+  std::this_thread::sleep_for(700ms);  // let it join the group
+
+  const World world = test::twoRoomWorld();
+  const std::vector<Pose2> poses = test::twoRoomPoses();
+  PoseGraph truth_graph, wrong_graph;
+  const Pose2 shift(0.5, -0.3, 0.1);  // a graph before its loop closure: everything off
+  for (size_t k = 0; k < poses.size(); ++k) {
+    const int64_t utime = 1'000'000 * static_cast<int64_t>(k + 1);
+    truth_graph.addNode({static_cast<int64_t>(k), utime, poses[k]});
+    wrong_graph.addNode({static_cast<int64_t>(k), utime, shift * poses[k]});
+    polarslam::laser_scan_t scan = toLcm(test::castScan(world, poses[k], 361, 2 * std::numbers::pi, utime));
+    scan.seq = static_cast<int64_t>(k);
+    const polarslam::anchored_pose_t anchor = toLcm(AnchoredPose{utime, static_cast<int64_t>(k), Pose2(), true},
+                                                    static_cast<int64_t>(k));
+    if (k % 2) {
+      lcm.publish("LASER", &scan);
+      lcm.publish("PSM_SLAM_ANCHORS", &anchor);
+    } else {
+      lcm.publish("PSM_SLAM_ANCHORS", &anchor);
+      lcm.publish("LASER", &scan);
+    }
+    std::this_thread::sleep_for(20ms);
+  }
+  auto occupiedNearWalls = [&](const GridSlice& g) {
+    int occupied = 0, near = 0;
+    for (int y = 0; y < g.height; ++y)
+      for (int x = 0; x < g.width; ++x)
+        if (g.occupied(x, y)) {
+          ++occupied;
+          near += test::distanceToWalls(world, g.cellCenter(x, y)) < 0.1;
+        }
+    return occupied > 0 ? static_cast<double>(near) / occupied : 0.0;
+  };
+  lcm.publish("PSM_SLAM_GRAPH", &static_cast<const polarslam::pose_graph_t&>(toLcm(wrong_graph, 7'000'000, 0, 0, 0.0)));
+  ASSERT_TRUE(handleUntil(lcm, 10s, [&] { return !grids.empty(); })) << "no GRID_MAP; see " << (dir / "grid.log");
+  EXPECT_LT(occupiedNearWalls(grids.back()), 0.5) << "placed by the shifted graph";
+  const size_t before = grids.size();
+  lcm.publish("PSM_SLAM_GRAPH", &static_cast<const polarslam::pose_graph_t&>(toLcm(truth_graph, 7'000'000, 1, 1, 0.0)));
+  ASSERT_TRUE(handleUntil(lcm, 10s, [&] { return grids.size() > before; }));
+  EXPECT_GT(occupiedNearWalls(grids.back()), 0.95) << "re-placed by the corrected graph";
+  grid.signal(SIGINT);
+  ASSERT_TRUE(grid.waitFor(10s));
+  EXPECT_EQ(grid.exitCode(), 0);
+  octomap::OcTree bt(0.1);
+  EXPECT_TRUE(bt.readBinary((dir / "maps" / "map.bt").string())) << "map files written on exit";
   std::filesystem::remove_all(dir);
 }
 

@@ -112,8 +112,8 @@ TEST(LcmDecode, SonarAndFeatureCountsAreChecked) {
   EXPECT_EQ(fout.lines.at(0).d, 2.0);
   EXPECT_EQ(fout.points.at(1).x, -0.5);
   EXPECT_EQ(fout.num_rejected, 3);
-  // The point count sits 4 + 4 bytes before the end (then num_rejected), after 2 points.
-  const size_t points_at = fbuf.size() - 4 - 2 * static_cast<size_t>(point_feature_t{}.getEncodedSize() - 8) - 4;
+  // The point count sits before 2 points, num_rejected and num_break_hints (no hints) at the end.
+  const size_t points_at = fbuf.size() - 4 - 4 - 2 * static_cast<size_t>(point_feature_t{}.getEncodedSize() - 8) - 4;
   ASSERT_EQ(getCount(fbuf, points_at), 2u);
   putCount(fbuf, points_at, 0x7ffffff0u);
   EXPECT_FALSE(decodeLcm(fout, fbuf.data(), fbuf.size()));

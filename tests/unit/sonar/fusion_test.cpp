@@ -274,6 +274,8 @@ FeatureSet laserFeatures(int64_t utime, double wall_distance) {
   return f;
 }
 
+// A laser set waits sonar_wait_s of stream time, whatever has arrived meanwhile: live, the laser
+// features reach the fusion after the sonar cycles of their own time, offline before them.
 TEST(FeatureFusionStream, ALaserSetWaitsForTheSonarCycleOfItsTimeAndFusesWithIt) {
   FeatureFusionParams p;
   p.laser_aided_selection = false;
@@ -284,6 +286,10 @@ TEST(FeatureFusionStream, ALaserSetWaitsForTheSonarCycleOfItsTimeAndFusesWithIt)
   ASSERT_EQ(ready.size(), 1u);  // only the old sonar cycle
   EXPECT_EQ(ready[0].utime, 900'000);
   fusion.addSonar(sonarScan(1'000'000, 0, {planeAhead(3.001)}));
+  EXPECT_TRUE(fusion.takeReady().empty()) << "released before sonar_wait_s of stream time";
+  OdometryReading later;
+  later.utime = 1'000'000 + static_cast<int64_t>(p.sonar_wait_s * 1e6);
+  fusion.addOdometry(later);
   ready = fusion.takeReady();
   ASSERT_EQ(ready.size(), 1u);
   EXPECT_EQ(ready[0].utime, 1'000'000);
