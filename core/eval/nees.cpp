@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "eval/chi_squared.hpp"
+#include "geometry/chi_squared.hpp"
 
 namespace polarslam {
 

@@ -8,7 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "io/image.hpp"
+#include "io/atomic_file.hpp"
+#include "plot/image.hpp"
 
 namespace polarslam {
 namespace {

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "grid/occupancy_grid.hpp"
-#include "io/plot.hpp"
+#include "plot/plot.hpp"
 
 namespace polarslam {
 

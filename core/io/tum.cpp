@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "io/image.hpp"
+#include "io/atomic_file.hpp"
 #include "io/text_fields.hpp"
 
 namespace polarslam {

@@ -2,7 +2,7 @@
 #include <cmath>
 
 #include "laser/laser_feature_extractor.hpp"
-#include "sim/yaml_fields.hpp"
+#include "config/yaml_fields.hpp"
 
 namespace polarslam {
 namespace {

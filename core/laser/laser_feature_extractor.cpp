@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "eval/chi_squared.hpp"
+#include "geometry/chi_squared.hpp"
 
 namespace polarslam {
 namespace {

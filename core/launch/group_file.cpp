@@ -7,7 +7,7 @@
 #include <set>
 #include <stdexcept>
 
-#include "sim/yaml_fields.hpp"
+#include "config/yaml_fields.hpp"
 
 namespace polarslam {
 namespace {

@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "sim/yaml_fields.hpp"
+#include "config/yaml_fields.hpp"
 
 namespace polarslam {
 namespace {
@@ -47,7 +47,7 @@ void readFusionSection(const YamlFields& y, const YAML::Node& node, FeaturePipel
 }
 
 FeaturePipelineConfig configForRobotFile(const std::string& path, SlamSensors sensors) {
-  return configForRobot(loadSimConfig(path), sensors);
+  return configForRobot(loadRobotDescription(path), sensors);
 }
 
 }  // namespace
@@ -68,7 +68,7 @@ const char* toString(SlamSensors sensors) {
   return "?";
 }
 
-FeaturePipelineConfig configForRobot(const SimConfig& robot, SlamSensors sensors) {
+FeaturePipelineConfig configForRobot(const RobotDescription& robot, SlamSensors sensors) {
   FeaturePipelineConfig c;
   c.sensors = sensors;
   c.fusion.use_laser = sensors != SlamSensors::Sonar;
@@ -104,13 +104,13 @@ FeaturePipelineConfig configForRobot(const SimConfig& robot, SlamSensors sensors
 }
 
 FeaturePipelineConfig loadFeaturePipelineConfig(const std::string& path, SlamSensors sensors) {
-  if (path.empty()) return configForRobot(SimConfig{}, sensors);
+  if (path.empty()) return configForRobot(RobotDescription{}, sensors);
   const YamlFields y(path);
   const YAML::Node& root = y.root();
   if (!root.IsMap()) y.fail(root, "expected a robot file or a map with robot/ekf/fusion/laser_features sections");
   if (y.has(root, "laser") || y.has(root, "sonars") || y.has(root, "odometry")) return configForRobotFile(path, sensors);
   y.requireMap(root, "estimator config", {"robot", "ekf", "fusion", "laser_features"});
-  FeaturePipelineConfig c = configForRobot(SimConfig{}, sensors);
+  FeaturePipelineConfig c = configForRobot(RobotDescription{}, sensors);
   if (y.has(root, "robot")) {
     std::filesystem::path robot = y.text(root, "robot", "estimator config", "");
     if (robot.is_relative()) robot = std::filesystem::path(path).parent_path() / robot;

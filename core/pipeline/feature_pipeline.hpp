@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "laser/laser_feature_extractor.hpp"
-#include "sim/sim_config.hpp"
+#include "robot/robot_description.hpp"
 #include "slam/feature_slam.hpp"
 #include "sonar/feature_fusion.hpp"
 #include "sonar/sonar_break_hints.hpp"
@@ -49,7 +49,7 @@ struct FeaturePipelineConfig {
 
 /// The configuration that describes a robot: odometry model from its wheel base and wheel-error
 /// constants, laser error model, laser noise for the sonar selection gates, sonar accuracy floors.
-FeaturePipelineConfig configForRobot(const SimConfig& robot, SlamSensors sensors);
+FeaturePipelineConfig configForRobot(const RobotDescription& robot, SlamSensors sensors);
 
 /// Reads a robot file or an estimator file (see above); an empty path gives the default robot's
 /// configuration. Throws std::runtime_error "FILE:LINE: ...".

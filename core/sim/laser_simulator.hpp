@@ -11,7 +11,7 @@
 
 #include "laser/laser_scan.hpp"
 #include "sim/random.hpp"
-#include "sim/sim_config.hpp"
+#include "robot/robot_description.hpp"
 #include "sim/world.hpp"
 
 namespace polarslam {

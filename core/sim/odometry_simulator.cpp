@@ -4,7 +4,7 @@
 
 namespace polarslam {
 
-OdometrySimulator::OdometrySimulator(const OdometryConfig& odometry, const RobotConfig& robot, uint64_t seed)
+OdometrySimulator::OdometrySimulator(const OdometryConfig& odometry, const DriveConfig& robot, uint64_t seed)
     : config_(odometry), rng_(seed) {
   model_.wheelbase = robot.wheel_base * (1.0 + odometry.wheel_base_error);
   model_.k_left = odometry.k_left;

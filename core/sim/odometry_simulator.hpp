@@ -8,14 +8,14 @@
 #include "odometry/odometry_model.hpp"
 #include "odometry/odometry_reading.hpp"
 #include "sim/random.hpp"
-#include "sim/sim_config.hpp"
+#include "robot/robot_description.hpp"
 #include "sim/trajectory.hpp"
 
 namespace polarslam {
 
 class OdometrySimulator {
  public:
-  OdometrySimulator(const OdometryConfig& odometry, const RobotConfig& robot, uint64_t seed);
+  OdometrySimulator(const OdometryConfig& odometry, const DriveConfig& robot, uint64_t seed);
 
   /// The reading at `utime` when the wheels have truly rolled `true_travel` since the start
   /// (cumulative) and `dt` seconds passed since the previous reading. The odometry frame is

@@ -17,7 +17,7 @@ double distanceToSegment(const Vec2& p, const Vec2& a, const Vec2& b) {
 
 }  // namespace
 
-PathFollower::PathFollower(const RobotConfig& robot) : robot_(robot) {}
+PathFollower::PathFollower(const DriveConfig& robot) : robot_(robot) {}
 
 void PathFollower::setPath(std::vector<Vec2> waypoints, bool loop) {
   waypoints_ = std::move(waypoints);

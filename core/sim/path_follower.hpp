@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "geometry/pose2.hpp"
-#include "sim/sim_config.hpp"
+#include "robot/robot_description.hpp"
 
 namespace polarslam {
 
@@ -18,7 +18,7 @@ struct VelocityCommand {
 
 class PathFollower {
  public:
-  explicit PathFollower(const RobotConfig& robot);
+  explicit PathFollower(const DriveConfig& robot);
 
   /// Replaces the path. With `loop`, the path continues from the last waypoint to the first
   /// and never finishes. An empty path means: stand still (finished).
@@ -43,7 +43,7 @@ class PathFollower {
   VelocityCommand desiredCommand(const Pose2& pose);
   VelocityCommand limitAcceleration(const VelocityCommand& desired, const VelocityCommand& current, double dt) const;
 
-  RobotConfig robot_;
+  DriveConfig robot_;
   std::vector<Vec2> waypoints_;
   bool loop_ = false;
   size_t segment_ = 0;  ///< current segment (waypoint segment_ → segment_ + 1), unbounded for loops

@@ -37,7 +37,7 @@ struct Schedule {
 }  // namespace
 
 struct Simulator::Impl {
-  Impl(World w, SimConfig c, uint64_t seed)
+  Impl(World w, RobotDescription c, uint64_t seed)
       : world(std::move(w)),
         config(std::move(c)),
         trajectory(startPose(world), config.robot.wheel_base),
@@ -132,7 +132,7 @@ struct Simulator::Impl {
   }
 
   World world;
-  SimConfig config;
+  RobotDescription config;
   Trajectory trajectory;
   PathFollower follower;
   VelocityCommand command;
@@ -148,7 +148,7 @@ struct Simulator::Impl {
   std::vector<Schedule> sonar_schedules;
 };
 
-Simulator::Simulator(World world, SimConfig config, uint64_t seed)
+Simulator::Simulator(World world, RobotDescription config, uint64_t seed)
     : impl_(new Impl(std::move(world), std::move(config), seed)) {}
 Simulator::~Simulator() { delete impl_; }
 Simulator::Simulator(Simulator&& other) noexcept : impl_(other.impl_) { other.impl_ = nullptr; }
@@ -173,6 +173,6 @@ void Simulator::setPath(const std::vector<Vec2>& waypoints) {
 }
 Pose2 Simulator::truePose() const { return impl_->trajectory.poseAt(time()); }
 const World& Simulator::world() const { return impl_->world; }
-const SimConfig& Simulator::config() const { return impl_->config; }
+const RobotDescription& Simulator::config() const { return impl_->config; }
 
 }  // namespace polarslam

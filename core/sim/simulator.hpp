@@ -4,7 +4,7 @@
 //
 // CONTRACT used by processes/polarslam-sim and `polarslam simulate` (keep these signatures):
 //   World world = loadWorld("config/worlds/office.yaml");
-//   SimConfig cfg = loadSimConfig("config/robots/default.yaml");   // robot + sensors
+//   RobotDescription cfg = loadRobotDescription("config/robots/default.yaml");   // robot + sensors
 //   Simulator sim(world, cfg, seed);
 //   while (sim.time() < seconds && !sim.finished()) sim.step(sink);   // emits events in time order
 #include <cstdint>
@@ -15,7 +15,7 @@
 #include "laser/laser_scan.hpp"
 #include "odometry/odometry_reading.hpp"
 #include "sonar/sonar_targets.hpp"
-#include "sim/sim_config.hpp"
+#include "robot/robot_description.hpp"
 #include "sim/world.hpp"
 
 namespace polarslam {
@@ -32,7 +32,7 @@ class SimSink {
 
 class Simulator {
  public:
-  Simulator(World world, SimConfig config, uint64_t seed);
+  Simulator(World world, RobotDescription config, uint64_t seed);
   ~Simulator();
   Simulator(Simulator&&) noexcept;
   Simulator& operator=(Simulator&&) noexcept;
@@ -50,7 +50,7 @@ class Simulator {
   /// True pose of the robot base in the world frame.
   Pose2 truePose() const;
   const World& world() const;
-  const SimConfig& config() const;
+  const RobotDescription& config() const;
 
  private:
   struct Impl;

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "sim/random.hpp"
-#include "sim/sim_config.hpp"
+#include "robot/robot_description.hpp"
 #include "sim/world.hpp"
 #include "sonar/sonar_targets.hpp"
 

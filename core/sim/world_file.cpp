@@ -3,7 +3,7 @@
 #include <stdexcept>
 
 #include "sim/world.hpp"
-#include "sim/yaml_fields.hpp"
+#include "config/yaml_fields.hpp"
 
 namespace polarslam {
 namespace {

@@ -5,7 +5,7 @@
 #include <map>
 #include <mutex>
 
-#include "eval/chi_squared.hpp"
+#include "geometry/chi_squared.hpp"
 
 namespace polarslam {
 

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-#include "eval/chi_squared.hpp"
+#include "geometry/chi_squared.hpp"
 #include "sonar/feature_frames.hpp"
 
 namespace polarslam {

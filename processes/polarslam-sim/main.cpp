@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
   ProcessContext::installSignalHandlers();  // first: a stop during start-up still ends cleanly
   try {
     ProcessContext context("polarslam-sim", url);
-    Simulator sim(loadWorld(world), loadSimConfig(robot), seed);
+    Simulator sim(loadWorld(world), loadRobotDescription(robot), seed);
     auto sink = makeSimChannels(channels, [&](const std::string& channel, int64_t, const auto& msg) {
       context.publish(channel, msg);
       context.handled();

@@ -13,7 +13,7 @@
 #include "eval/ate.hpp"
 #include "eval/eval_json.hpp"
 #include "eval/relation_metric.hpp"
-#include "io/image.hpp"
+#include "io/atomic_file.hpp"
 #include "io/relations.hpp"
 #include "io/text_fields.hpp"
 #include "io/tum.hpp"

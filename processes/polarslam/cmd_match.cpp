@@ -10,7 +10,7 @@
 
 #include "command_registry.hpp"
 #include "common/progress.hpp"
-#include "io/image.hpp"
+#include "io/atomic_file.hpp"
 #include "scanmatch/laser_odometry.hpp"
 #include "scanmatch/scan_matcher.hpp"
 

@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "command_registry.hpp"
-#include "io/image.hpp"
+#include "io/atomic_file.hpp"
 
 namespace polarslam {
 namespace {

@@ -19,7 +19,7 @@ struct SimulateOptions {
 };
 
 void runSimulate(const SimulateOptions& o) {
-  Simulator sim(loadWorld(o.world), loadSimConfig(o.robot), o.seed);
+  Simulator sim(loadWorld(o.world), loadRobotDescription(o.robot), o.seed);
   LcmLogWriter writer(o.out);
   auto sink = makeSimChannels(SensorChannels{}, [&](const std::string& channel, int64_t utime, const auto& msg) {
     writer.write(channel, utime, msg);

@@ -187,7 +187,7 @@ struct SeedResult {
   double sim_seconds = 0.0, regenerate_ms = 0.0;
 };
 
-SeedResult runSeed(uint64_t seed, const World& world, const SimConfig& robot, const Options& o) {
+SeedResult runSeed(uint64_t seed, const World& world, const RobotDescription& robot, const Options& o) {
   FeatureSlamEstimator ekf(configForRobot(robot, parseSlamSensors(o.sensors)));
   Recorder recorder(ekf);
   Simulator sim(world, robot, seed);
@@ -262,7 +262,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   const World world = loadWorld(o.world);
-  SimConfig robot = loadSimConfig(o.robot);
+  RobotDescription robot = loadRobotDescription(o.robot);
   robot.odometry.left_radius_error = robot.odometry.right_radius_error = o.radius_error;
   // configForRobot() gives the EKF the scaled random error, not the systematic ones.
   robot.odometry.wheel_base_error = o.wheel_base_error;

@@ -82,7 +82,7 @@ ScansWithPoses simulated(const Options& o) {
   ScansWithPoses out;
   out.source = o.world + " (simulated, true poses)";
   const World world = loadWorld(o.world);
-  const SimConfig robot = loadSimConfig(o.robot);
+  const RobotDescription robot = loadRobotDescription(o.robot);
   for (uint64_t seed = 1; out.scans.size() < o.scans; ++seed) {
     const size_t before = out.scans.size();
     Simulator sim(world, robot, seed);

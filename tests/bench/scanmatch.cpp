@@ -24,7 +24,7 @@
 #include "eval/error_statistics.hpp"
 #include "eval/relation_metric.hpp"
 #include "io/carmen.hpp"
-#include "io/image.hpp"
+#include "plot/image.hpp"
 #include "io/relations.hpp"
 #include "scanmatch/laser_odometry.hpp"
 #include "scanmatch/scan_matcher.hpp"

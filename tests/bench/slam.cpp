@@ -161,7 +161,7 @@ double median(std::vector<double> v) {
 
 void runClaim(const Options& o, const std::string& world_path) {
   const World world = loadWorld(world_path);
-  const SimConfig robot = loadSimConfig(o.robot);
+  const RobotDescription robot = loadRobotDescription(o.robot);
   const std::vector<SlamSensors> configs = {SlamSensors::Laser, SlamSensors::Sonar, SlamSensors::Fused};
   std::map<SlamSensors, Row> rows;
   int fused_wins = 0;

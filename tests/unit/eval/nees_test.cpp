@@ -4,7 +4,7 @@
 #include <cmath>
 #include <random>
 
-#include "eval/chi_squared.hpp"
+#include "geometry/chi_squared.hpp"
 #include "eval/nees.hpp"
 
 namespace polarslam {

@@ -176,7 +176,7 @@ void planAndDriveInRoom(const Pose2& map_error) {
     map_poses.push_back(world_to_map * p);
   }
   const GridSlice slice = buildGrid(scans, map_poses).slice();
-  Simulator sim(world, SimConfig{}, 11);
+  Simulator sim(world, RobotDescription{}, 11);
   PlannerOptions planner;
   planner.robot_radius = 0.35;
   for (const Vec2& world_goal : {Vec2(0.8, 1.3), Vec2(-0.8, -1.4)}) {

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "laser/laser_feature_extractor.hpp"
-#include "sim/sim_config.hpp"
+#include "robot/robot_description.hpp"
 #include "sim/simulator.hpp"
 #include "sim/world.hpp"
 #include "unit/laser/synthetic_scans.hpp"
@@ -100,7 +100,7 @@ TEST(SimulatedWalls, ExtractedLinesAndCornersMatchTheTrueWorldWithinTheirCovaria
   for (const WorldRun& run : {WorldRun{"room", 40.0}, WorldRun{"office", 60.0}}) {
     SCOPED_TRACE(run.world);
     const World world = loadWorld(std::string(POLARSLAM_SOURCE_DIR "/config/worlds/") + run.world + ".yaml");
-    Simulator sim(world, loadSimConfig(robot), 11);
+    Simulator sim(world, loadRobotDescription(robot), 11);
     Recorder recorder;
     while (sim.time() < run.seconds && !sim.finished()) sim.step(recorder);
     ASSERT_GT(recorder.scans.size(), 100u);

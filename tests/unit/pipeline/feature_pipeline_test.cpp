@@ -87,7 +87,7 @@ struct SimulatedRun : SimSink {
 const SimulatedRun& officeRun() {
   static const SimulatedRun run = [] {
     SimulatedRun r;
-    Simulator sim(loadWorld(source("config/worlds/office.yaml")), loadSimConfig(source("config/robots/default.yaml")), 5);
+    Simulator sim(loadWorld(source("config/worlds/office.yaml")), loadRobotDescription(source("config/robots/default.yaml")), 5);
     while (sim.time() < 60.0 && !sim.finished()) sim.step(r);
     return r;
   }();

@@ -24,8 +24,8 @@ struct RecordingSink : SimSink {
 };
 
 /// A config whose sensors are exact: no range errors, no sonar noise, no odometry noise.
-inline SimConfig exactConfig() {
-  SimConfig c;
+inline RobotDescription exactConfig() {
+  RobotDescription c;
   c.laser.errors = RangeErrorParams{};
   c.laser.errors.max_incidence = deg2rad(80.0);
   c.laser.compensate_quantizer_offset = false;

@@ -6,7 +6,7 @@
 
 #include <random>
 
-#include "eval/chi_squared.hpp"
+#include "geometry/chi_squared.hpp"
 #include "slam/psm_slam_filter.hpp"
 
 namespace polarslam {

@@ -13,7 +13,7 @@
 #include "io/relations.hpp"
 #include "io/tum.hpp"
 #include "launch/group_file.hpp"
-#include "sim/sim_config.hpp"
+#include "robot/robot_description.hpp"
 #include "sim/world.hpp"
 
 namespace polarslam {
@@ -112,26 +112,26 @@ TEST_F(FileInputs, WorldWallIsNotASequence) {
 
 TEST_F(FileInputs, ValidRobotLoads) {
   const std::string path = write("robot.yaml", "robot:\n  wheel_base: 0.4\nlaser:\n  beams: 91\n");
-  EXPECT_NO_THROW((void)loadSimConfig(path));
+  EXPECT_NO_THROW((void)loadRobotDescription(path));
 }
 
 TEST_F(FileInputs, TruncatedRobot) {
   const std::string path = write("robot.yaml", "robot:\n  wheel_base: 0.4\nlaser:\n  mount: {x: 0.2, y:");
-  expectFileLineError([&] { (void)loadSimConfig(path); }, path, 0, "YAML");
+  expectFileLineError([&] { (void)loadRobotDescription(path); }, path, 0, "YAML");
 }
 
 TEST_F(FileInputs, BinaryRobot) {
   const std::string path = write("robot.yaml", std::string("\x7f" "ELF\x02\x01\x01\0\0\0\0\0\0\0\0\0\x03\0>\0", 20));
-  expectFileLineError([&] { (void)loadSimConfig(path); }, path, 1, "");
+  expectFileLineError([&] { (void)loadRobotDescription(path); }, path, 1, "");
 }
 
 TEST_F(FileInputs, AbsurdRobotValues) {
   const std::string beams = write("beams.yaml", "robot:\n  wheel_base: 0.4\nlaser:\n  beams: -5\n");
-  expectFileLineError([&] { (void)loadSimConfig(beams); }, beams, 4, "beams");
+  expectFileLineError([&] { (void)loadRobotDescription(beams); }, beams, 4, "beams");
   const std::string rate = write("rate.yaml", "odometry:\n  rate: 1e308\n");
-  expectFileLineError([&] { (void)loadSimConfig(rate); }, rate, 2, "rate");
+  expectFileLineError([&] { (void)loadRobotDescription(rate); }, rate, 2, "rate");
   const std::string nan = write("nan.yaml", "robot:\n  max_speed: .nan\n");
-  expectFileLineError([&] { (void)loadSimConfig(nan); }, nan, 2, "max_speed");
+  expectFileLineError([&] { (void)loadRobotDescription(nan); }, nan, 2, "max_speed");
 }
 
 const std::string kGroup =

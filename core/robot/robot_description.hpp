@@ -19,7 +19,7 @@ struct PathFollowerConfig {
   double goal_tolerance = 0.05;       ///< m: the final waypoint counts as reached within this
 };
 
-struct RobotConfig {
+struct DriveConfig {
   double wheel_base = 0.5;            ///< m, true distance between the wheels' contact points
   double wheel_radius = 0.1;          ///< m, nominal (what odometry assumes)
   double max_speed = 0.5;             ///< m/s
@@ -78,11 +78,11 @@ struct SonarConfig {
   double right_angle_tolerance = deg2rad(10.0);  ///< rad: concave vertices this close to 90° are corners
 };
 
-struct SimConfig {
+struct RobotDescription {
   std::string source;                  ///< file it was loaded from, if any
   int64_t start_utime = 1700000000000000;  ///< µs timestamp of simulated time 0
   double ground_truth_rate = 50.0;     ///< Hz
-  RobotConfig robot;
+  DriveConfig robot;
   OdometryConfig odometry;
   LaserConfig laser;
   std::vector<SonarConfig> sonars = defaultSonars();
@@ -92,10 +92,10 @@ struct SimConfig {
 
 /// Loads a robot + sensor file; keys left out keep the defaults above. Throws
 /// std::runtime_error naming the file, line and key on anything malformed or absurd.
-SimConfig loadSimConfig(const std::string& yaml_path);
+RobotDescription loadRobotDescription(const std::string& yaml_path);
 
 /// Checks the cross-field consistency of a config built in code (the loader checks each value).
 /// Throws std::invalid_argument naming the first bad key.
-void validate(const SimConfig& config);
+void validate(const RobotDescription& config);
 
 }  // namespace polarslam

@@ -1,10 +1,10 @@
-#include "sim/sim_config.hpp"
+#include "robot/robot_description.hpp"
 
 #include <cmath>
 #include <stdexcept>
 
 #include "laser/laser_scan.hpp"
-#include "sim/yaml_fields.hpp"
+#include "config/yaml_fields.hpp"
 
 namespace polarslam {
 namespace {
@@ -28,7 +28,7 @@ void readFollower(const YamlFields& f, const YAML::Node& node, PathFollowerConfi
   c.goal_tolerance = f.number(node, "goal_tolerance", ctx, c.goal_tolerance, 0.001, 5.0);
 }
 
-void readRobot(const YamlFields& f, const YAML::Node& node, RobotConfig& c) {
+void readRobot(const YamlFields& f, const YAML::Node& node, DriveConfig& c) {
   const std::string ctx = "robot";
   f.requireMap(node, ctx, {"wheel_base", "wheel_radius", "max_speed", "max_turn_rate_deg", "max_accel",
                            "max_angular_accel_deg", "control_period", "path_follower"});
@@ -126,7 +126,7 @@ SonarConfig readSonar(const YamlFields& f, const YAML::Node& node, size_t index)
 
 }  // namespace
 
-std::vector<SonarConfig> SimConfig::defaultSonars() {
+std::vector<SonarConfig> RobotDescription::defaultSonars() {
   SonarConfig front, left, right;
   front.name = "front";
   front.id = 0;
@@ -140,11 +140,11 @@ std::vector<SonarConfig> SimConfig::defaultSonars() {
   return {front, left, right};
 }
 
-SimConfig loadSimConfig(const std::string& yaml_path) {
+RobotDescription loadRobotDescription(const std::string& yaml_path) {
   const YamlFields f(yaml_path);
   const YAML::Node& root = f.root();
   f.requireMap(root, "robot config", {"start_utime", "ground_truth_rate", "robot", "odometry", "laser", "sonars"});
-  SimConfig c;
+  RobotDescription c;
   c.source = yaml_path;
   if (const YAML::Node t = root["start_utime"]) {
     try {
@@ -171,13 +171,13 @@ SimConfig loadSimConfig(const std::string& yaml_path) {
   return c;
 }
 
-void validate(const SimConfig& c) {
+void validate(const RobotDescription& c) {
   auto require = [](bool ok, const std::string& what) {
     if (!ok) throw std::invalid_argument(what);
   };
   require(c.start_utime >= 0, "start_utime must not be negative");
   require(c.ground_truth_rate > 0.0 && c.ground_truth_rate <= kMaxRate, "ground_truth_rate out of range");
-  const RobotConfig& r = c.robot;
+  const DriveConfig& r = c.robot;
   require(r.wheel_base > 0.0, "robot.wheel_base must be positive");
   require(r.wheel_radius > 0.0, "robot.wheel_radius must be positive");
   require(r.max_speed > 0.0 && r.max_turn_rate > 0.0, "robot.max_speed and max_turn_rate must be positive");

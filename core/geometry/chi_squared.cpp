@@ -1,4 +1,4 @@
-#include "eval/chi_squared.hpp"
+#include "geometry/chi_squared.hpp"
 
 #include <cmath>
 #include <limits>

@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "child_process.hpp"
-#include "io/image.hpp"
+#include "plot/image.hpp"
 
 using namespace std::chrono_literals;
 using polarslam::testing::binPath;

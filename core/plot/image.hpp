@@ -1,5 +1,5 @@
 #pragma once
-// Minimal raster images and PNG/PGM output (libpng), written atomically (temp file + rename).
+// Minimal raster images and PNG/PGM output (libpng), written atomically (io/atomic_file.hpp).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -41,7 +41,5 @@ void writePgm(const std::string& path, const GrayImage& image);
 /// Reads an 8-bit PNG back (RGB or gray, converted to RGB) — for tests.
 RgbImage readPng(const std::string& path);
 
-/// Writes `content` to path atomically (temp file in the same folder, then rename).
-void writeFileAtomically(const std::string& path, const std::string& content);
 
 }  // namespace polarslam

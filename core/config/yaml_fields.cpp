@@ -1,4 +1,4 @@
-#include "sim/yaml_fields.hpp"
+#include "config/yaml_fields.hpp"
 
 #include <algorithm>
 #include <cmath>

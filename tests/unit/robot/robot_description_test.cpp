@@ -7,15 +7,15 @@
 
 #include <unistd.h>
 
-#include "sim/sim_config.hpp"
-#include "sim_test_helpers.hpp"
+#include "robot/robot_description.hpp"
+#include "unit/sim/sim_test_helpers.hpp"
 
 namespace polarslam {
 namespace {
 
-TEST(SimConfig, BundledDefaultEqualsBuiltInDefaults) {
-  const SimConfig file = loadSimConfig(test::sourcePath("config/robots/default.yaml"));
-  const SimConfig code;
+TEST(RobotDescription, BundledDefaultEqualsBuiltInDefaults) {
+  const RobotDescription file = loadRobotDescription(test::sourcePath("config/robots/default.yaml"));
+  const RobotDescription code;
   EXPECT_EQ(file.start_utime, code.start_utime);
   EXPECT_DOUBLE_EQ(file.ground_truth_rate, code.ground_truth_rate);
   EXPECT_DOUBLE_EQ(file.robot.wheel_base, code.robot.wheel_base);
@@ -61,10 +61,10 @@ class SimConfigFile : public ::testing::Test {
     std::filesystem::create_directories(dir_);
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
-  SimConfig load(const std::string& text) {
+  RobotDescription load(const std::string& text) {
     const std::string path = (dir_ / "robot.yaml").string();
     std::ofstream(path) << text;
-    return loadSimConfig(path);
+    return loadRobotDescription(path);
   }
   std::string errorOf(const std::string& text) {
     try {
@@ -79,12 +79,12 @@ class SimConfigFile : public ::testing::Test {
 };
 
 TEST_F(SimConfigFile, MissingKeysKeepDefaultsAndDegreesBecomeRadians) {
-  const SimConfig c = load("laser:\n  fov_deg: 90\n  beams: 91\nsonars: []\n");
+  const RobotDescription c = load("laser:\n  fov_deg: 90\n  beams: 91\nsonars: []\n");
   EXPECT_NEAR(c.laser.fov, M_PI / 2, 1e-12);
   EXPECT_NEAR(c.laser.angle_min, -M_PI / 4, 1e-12);  // default: centred
   EXPECT_NEAR(c.laser.angleIncrement(), deg2rad(1.0), 1e-12);
   EXPECT_TRUE(c.sonars.empty());
-  EXPECT_DOUBLE_EQ(c.robot.max_speed, SimConfig{}.robot.max_speed);
+  EXPECT_DOUBLE_EQ(c.robot.max_speed, RobotDescription{}.robot.max_speed);
 }
 
 TEST_F(SimConfigFile, ErrorsNameFileLineAndKey) {
@@ -109,14 +109,14 @@ TEST_F(SimConfigFile, ErrorsNameFileLineAndKey) {
 }
 
 TEST(SimConfigValidate, RejectsInconsistentConfigsBuiltInCode) {
-  SimConfig c;
+  RobotDescription c;
   EXPECT_NO_THROW(validate(c));
   c.laser.time_increment = 0.01;  // 181 beams × 10 ms > 100 ms
   EXPECT_THROW(validate(c), std::invalid_argument);
-  c = SimConfig{};
+  c = RobotDescription{};
   c.sonars[1].range_min = 10.0;
   EXPECT_THROW(validate(c), std::invalid_argument);
-  c = SimConfig{};
+  c = RobotDescription{};
   c.odometry.k_left = -1.0;
   EXPECT_THROW(validate(c), std::invalid_argument);
   EXPECT_THROW(Simulator(World{}, c, 1), std::invalid_argument);

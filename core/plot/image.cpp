@@ -1,4 +1,6 @@
-#include "io/image.hpp"
+#include "plot/image.hpp"
+
+#include "io/atomic_file.hpp"
 
 #include <png.h>
 
@@ -14,17 +16,9 @@ namespace {
 
 struct FileCloser { void operator()(FILE* f) const { if (f) std::fclose(f); } };
 
-std::string tempPathFor(const std::string& path) { return path + ".tmp"; }
-
-void commit(const std::string& tmp, const std::string& path) {
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw std::runtime_error("cannot rename '" + tmp + "' to '" + path + "': " + ec.message());
-}
-
 void writePngRows(const std::string& path, int width, int height, int color_type,
                   const uint8_t* data, size_t row_bytes) {
-  const std::string tmp = tempPathFor(path);
+  const std::string tmp = temporaryPathFor(path);
   std::unique_ptr<FILE, FileCloser> file(std::fopen(tmp.c_str(), "wb"));
   if (!file) throw std::runtime_error("cannot write '" + path + "'");
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
@@ -43,7 +37,7 @@ void writePngRows(const std::string& path, int width, int height, int color_type
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
   file.reset();
-  commit(tmp, path);
+  commitTemporary(tmp, path);
 }
 
 }  // namespace
@@ -94,17 +88,6 @@ RgbImage readPng(const std::string& path) {
   if (!png_image_finish_read(&img, nullptr, out.pixels.data(), 0, nullptr))
     throw std::runtime_error("cannot decode PNG '" + path + "'");
   return out;
-}
-
-void writeFileAtomically(const std::string& path, const std::string& content) {
-  const std::string tmp = tempPathFor(path);
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write '" + path + "'");
-    out.write(content.data(), static_cast<std::streamsize>(content.size()));
-    if (!out) throw std::runtime_error("write failed on '" + path + "'");
-  }
-  commit(tmp, path);
 }
 
 }  // namespace polarslam

@@ -23,7 +23,7 @@ struct MonteCarloResult {
 };
 
 MonteCarloResult monteCarlo(const Drive& drive, const OdometryConfig& oc, int runs) {
-  RobotConfig robot;
+  DriveConfig robot;
   const double rate = oc.rate, dt = 1.0 / rate;
   const int steps = static_cast<int>(std::lround(drive.seconds * rate));
   Trajectory truth(Pose2(), robot.wheel_base);
@@ -107,7 +107,7 @@ TEST(OdometrySim, SystematicRadiusErrorBendsAStraightRun) {
   OdometryConfig oc;
   oc.k_left = oc.k_right = 0.0;
   oc.right_radius_error = 0.01;
-  RobotConfig robot;
+  DriveConfig robot;
   OdometrySimulator odo(oc, robot, 1);
   const OdometryReading r0 = odo.measure(0, {0.0, 0.0}, 0.0);
   const OdometryReading r = odo.measure(1, {10.0, 10.0}, 1.0);
@@ -121,7 +121,7 @@ TEST(OdometrySim, WheelBaseErrorScalesTurnedAngle) {
   OdometryConfig oc;
   oc.k_left = oc.k_right = 0.0;
   oc.wheel_base_error = 0.02;  // odometry thinks the wheels are 2 % further apart
-  RobotConfig robot;
+  DriveConfig robot;
   OdometrySimulator odo(oc, robot, 1);
   odo.measure(0, {0.0, 0.0}, 0.0);
   const double s = 0.25 * M_PI / 2;  // a true 90° turn on the spot with B = 0.5
@@ -131,7 +131,7 @@ TEST(OdometrySim, WheelBaseErrorScalesTurnedAngle) {
 
 TEST(OdometrySim, ExactOdometryFollowsTheSimulatedRobot) {
   // Without errors, odometry equals the true motion expressed in the start frame.
-  SimConfig cfg = test::exactConfig();
+  RobotDescription cfg = test::exactConfig();
   cfg.laser.enabled = false;
   cfg.sonars.clear();
   Simulator sim(loadWorld(test::sourcePath("config/worlds/room.yaml")), cfg, 3);
@@ -153,7 +153,7 @@ TEST(OdometrySim, ExactOdometryFollowsTheSimulatedRobot) {
 }
 
 TEST(OdometrySim, PublishedCovarianceGrowsWithDistance) {
-  SimConfig cfg;
+  RobotDescription cfg;
   cfg.laser.enabled = false;
   cfg.sonars.clear();
   Simulator sim(loadWorld(test::sourcePath("config/worlds/room.yaml")), cfg, 3);

@@ -36,7 +36,7 @@ std::string fingerprint(const RecordingSink& s) {
 World room() { return loadWorld(sourcePath("config/worlds/room.yaml")); }
 
 TEST(Simulator, SameSeedGivesIdenticalEventsAndOtherSeedsDiffer) {
-  Simulator a(room(), SimConfig{}, 42), b(room(), SimConfig{}, 42), c(room(), SimConfig{}, 43);
+  Simulator a(room(), RobotDescription{}, 42), b(room(), RobotDescription{}, 42), c(room(), RobotDescription{}, 43);
   const RecordingSink ra = test::run(a, 5.0), rb = test::run(b, 5.0), rc = test::run(c, 5.0);
   EXPECT_EQ(fingerprint(ra), fingerprint(rb));
   EXPECT_NE(fingerprint(ra), fingerprint(rc));
@@ -46,7 +46,7 @@ TEST(Simulator, SameSeedGivesIdenticalEventsAndOtherSeedsDiffer) {
 }
 
 TEST(Simulator, EventsAreInTimeOrderAtTheConfiguredRates) {
-  SimConfig cfg;
+  RobotDescription cfg;
   Simulator sim(room(), cfg, 1);
   const RecordingSink s = test::run(sim, 10.0);
   EXPECT_TRUE(std::is_sorted(s.event_times.begin(), s.event_times.end()));
@@ -71,7 +71,7 @@ TEST(Simulator, EventsAreInTimeOrderAtTheConfiguredRates) {
 TEST(Simulator, LaserReadingsAreNearTheTrueRangesWithDefaultErrors) {
   // Sanity of the whole chain with the default SICK-like errors: beam 0 of each scan, taken at
   // a ground-truth instant, is within a few σ of the exact ray cast.
-  Simulator sim(room(), SimConfig{}, 5);
+  Simulator sim(room(), RobotDescription{}, 5);
   const RecordingSink s = test::run(sim, 10.0);
   const World w = room();
   std::vector<double> errors;
@@ -87,7 +87,7 @@ TEST(Simulator, LaserReadingsAreNearTheTrueRangesWithDefaultErrors) {
 }
 
 TEST(Simulator, ScansAreDistortedWhenTheRobotTurns) {
-  SimConfig cfg = test::exactConfig();
+  RobotDescription cfg = test::exactConfig();
   cfg.laser.time_increment = 0.0005;  // 90 ms per scan: distortion well above noise
   cfg.sonars.clear();
   const World w = room();
@@ -110,7 +110,7 @@ TEST(Simulator, ScansAreDistortedWhenTheRobotTurns) {
 }
 
 TEST(Simulator, PathFollowerVisitsWaypointsAndStopsAtTheLast) {
-  SimConfig cfg = test::exactConfig();
+  RobotDescription cfg = test::exactConfig();
   cfg.laser.enabled = false;
   cfg.sonars.clear();
   World w = room();
@@ -145,7 +145,7 @@ TEST(Simulator, PathFollowerVisitsWaypointsAndStopsAtTheLast) {
 }
 
 TEST(Simulator, SetPathReplacesTheRemainingPath) {
-  SimConfig cfg = test::exactConfig();
+  RobotDescription cfg = test::exactConfig();
   cfg.laser.enabled = false;
   cfg.sonars.clear();
   Simulator sim(room(), cfg, 1);  // the room's path loops forever
@@ -196,7 +196,7 @@ double closestWall(const World& w, const Vec2& p) {
 }
 
 TEST(Simulator, OfficeDriveClosesItsLoopInAFewMinutesWithoutTouchingWalls) {
-  SimConfig cfg = test::exactConfig();
+  RobotDescription cfg = test::exactConfig();
   cfg.laser.enabled = false;
   cfg.sonars.clear();
   const World w = loadWorld(sourcePath("config/worlds/office.yaml"));

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "geometry/pose2.hpp"
-#include "io/image.hpp"
+#include "plot/image.hpp"
 
 namespace polarslam {
 

@@ -1,4 +1,4 @@
-#include "io/plot.hpp"
+#include "plot/plot.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <cairo.h>
