@@ -57,6 +57,18 @@ void YamlFields::requireMap(const YAML::Node& node, const std::string& what,
   }
 }
 
+void YamlFields::requireMap(const YAML::Node& node, const std::string& what,
+                            const std::vector<std::string>& allowed) const {
+  if (!node.IsMap()) fail(node, what + ": expected a map of keys");
+  for (const auto& kv : node) {
+    const std::string key = kv.first.as<std::string>();
+    if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+    std::string list;
+    for (const std::string& a : allowed) list += (list.empty() ? "" : ", ") + a;
+    fail(kv.first, "unknown key '" + key + "' in " + what + " (allowed: " + list + ")");
+  }
+}
+
 void YamlFields::requireSequence(const YAML::Node& node, const std::string& what) const {
   if (!node.IsSequence()) fail(node, what + ": expected a list");
 }

@@ -5,6 +5,7 @@
 
 #include <initializer_list>
 #include <string>
+#include <vector>
 
 #include "geometry/pose2.hpp"
 
@@ -25,6 +26,7 @@ class YamlFields {
   /// Fails unless `node` is a map whose keys are all in `allowed` (catches typos).
   void requireMap(const YAML::Node& node, const std::string& what,
                   std::initializer_list<const char*> allowed) const;
+  void requireMap(const YAML::Node& node, const std::string& what, const std::vector<std::string>& allowed) const;
   /// Fails unless `node` is a sequence.
   void requireSequence(const YAML::Node& node, const std::string& what) const;
 

@@ -5,46 +5,49 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "config/yaml_fields.hpp"
+#include "config/parameter_table.hpp"
 
 namespace polarslam {
 namespace {
 
-void readSlamSection(const YamlFields& y, const YAML::Node& node, FeatureSlamParams& p) {
-  y.requireMap(node, "ekf",
-               {"gate_probability", "new_feature_probability", "tentative_gate_probability", "confirm_observations",
-                "tentative_timeout_s", "min_line_distance", "max_line_extent_gap", "observation_cov_scale",
-                "anchor_radius", "max_anchors", "latency_s", "ambiguity_nis_margin", "max_jcbb_nodes"});
-  p.association.gate_probability = y.number(node, "gate_probability", "ekf", p.association.gate_probability, 0.5, 0.999999);
-  p.new_feature_probability =
-      y.number(node, "new_feature_probability", "ekf", p.new_feature_probability, 0.5, 0.999999);
-  p.tentative_gate_probability =
-      y.number(node, "tentative_gate_probability", "ekf", p.tentative_gate_probability, 0.5, 0.999999);
-  p.confirm_observations = y.integer(node, "confirm_observations", "ekf", p.confirm_observations, 1, 1000);
-  p.tentative_timeout_s = y.number(node, "tentative_timeout_s", "ekf", p.tentative_timeout_s, 0.0, 3600.0);
-  p.min_line_distance = y.number(node, "min_line_distance", "ekf", p.min_line_distance, 0.0, 10.0);
-  p.max_line_extent_gap = y.number(node, "max_line_extent_gap", "ekf", p.max_line_extent_gap, 0.0, 1e6);
-  p.observation_cov_scale = y.number(node, "observation_cov_scale", "ekf", p.observation_cov_scale, 1e-3, 1e3);
-  p.anchor_radius = y.number(node, "anchor_radius", "ekf", p.anchor_radius, 0.0, 1e3);
-  p.max_anchors = y.integer(node, "max_anchors", "ekf", p.max_anchors, 0, 10000);
-  p.latency_s = y.number(node, "latency_s", "ekf", p.latency_s, 0.0, 60.0);
-  p.association.ambiguity_nis_margin =
-      y.number(node, "ambiguity_nis_margin", "ekf", p.association.ambiguity_nis_margin, 0.0, 1e6);
-  p.association.max_nodes = y.integer(node, "max_jcbb_nodes", "ekf", p.association.max_nodes, 1, 100000000);
+void describeSlam(ParameterTable& t, FeatureSlamParams& p) {
+  t.number("gate_probability", p.association.gate_probability, 0.5, 0.999999,
+           "individual and joint χ² gates of the data association (JCBB)");
+  t.number("new_feature_probability", p.new_feature_probability, 0.5, 0.999999,
+           "inside this gate of a map feature an observation never starts a new one");
+  t.number("tentative_gate_probability", p.tentative_gate_probability, 0.5, 0.999999,
+           "gate for matching tentative features");
+  t.integer("confirm_observations", p.confirm_observations, 1, 1000, "observations before a feature enters the filter");
+  t.number("tentative_timeout_s", p.tentative_timeout_s, 0.0, 3600.0, "s: a tentative feature not seen again is dropped");
+  t.number("min_line_distance", p.min_line_distance, 0.0, 10.0, "m: nearer lines are skipped (their normal flips)");
+  t.number("max_line_extent_gap", p.max_line_extent_gap, 0.0, 1e6, "m beyond a map line's extent: another wall");
+  t.number("observation_cov_scale", p.observation_cov_scale, 1e-3, 1e3, "multiplies every measurement covariance");
+  t.number("anchor_radius", p.anchor_radius, 0.0, 1e3, "m: map features within this anchor a laser scan");
+  t.integer("max_anchors", p.max_anchors, 0, 10000, "anchors per scan at most");
+  t.number("latency_s", p.latency_s, 0.0, 60.0, "s of stream time odometry waits for feature sets");
+  t.number("ambiguity_nis_margin", p.association.ambiguity_nis_margin, 0.0, 1e6,
+           "a rival association within this joint NIS of the best is ambiguous");
+  t.integer("max_jcbb_nodes", p.association.max_nodes, 1, 100000000, "JCBB search budget per feature set");
 }
 
-void readFusionSection(const YamlFields& y, const YAML::Node& node, FeaturePipelineConfig& c) {
-  y.requireMap(node, "fusion",
-               {"gate_probability", "max_sonar_offset_s", "sonar_wait_s", "laser_wait_s", "laser_aided_selection",
-                "sonar_break_hints"});
+void describeFusion(ParameterTable& t, FeaturePipelineConfig& c) {
   FeatureFusionParams& f = c.fusion;
-  f.fusion.gate_probability = y.number(node, "gate_probability", "fusion", f.fusion.gate_probability, 0.5, 0.999999);
-  f.max_sonar_offset_s = y.number(node, "max_sonar_offset_s", "fusion", f.max_sonar_offset_s, 0.0, 10.0);
-  f.sonar_wait_s = y.number(node, "sonar_wait_s", "fusion", f.sonar_wait_s, 0.0, 10.0);
-  f.laser_wait_s = y.number(node, "laser_wait_s", "fusion", f.laser_wait_s, 0.0, 10.0);
-  f.laser_aided_selection = y.boolean(node, "laser_aided_selection", "fusion", f.laser_aided_selection);
-  c.sonar_break_hints = y.boolean(node, "sonar_break_hints", "fusion", c.sonar_break_hints);
+  t.number("gate_probability", f.fusion.gate_probability, 0.5, 0.999999, "χ² gate for fusing sonar and laser");
+  t.number("max_sonar_offset_s", f.max_sonar_offset_s, 0.0, 10.0, "s: sonar cycles this close to a scan are fused");
+  t.number("sonar_wait_s", f.sonar_wait_s, 0.0, 10.0, "s of stream time a laser set waits for sonar cycles");
+  t.number("laser_wait_s", f.laser_wait_s, 0.0, 10.0, "s a sonar cycle waits for a laser set (also hint age)");
+  t.boolean("laser_aided_selection", f.laser_aided_selection, "sonar targets checked against the raw laser scan");
+  t.boolean("sonar_break_hints", c.sonar_break_hints, "sonar corners and edges break laser segments");
 }
+
+}  // namespace
+
+void describeFeaturePipeline(ParameterTable& ekf, ParameterTable& fusion, FeaturePipelineConfig& config) {
+  describeSlam(ekf, config.slam);
+  describeFusion(fusion, config);
+}
+
+namespace {
 
 FeaturePipelineConfig configForRobotFile(const std::string& path, SlamSensors sensors) {
   return configForRobot(loadRobotDescription(path), sensors);
@@ -116,8 +119,11 @@ FeaturePipelineConfig loadFeaturePipelineConfig(const std::string& path, SlamSen
     if (robot.is_relative()) robot = std::filesystem::path(path).parent_path() / robot;
     c = configForRobotFile(robot.string(), sensors);
   }
-  if (y.has(root, "ekf")) readSlamSection(y, root["ekf"], c.slam);
-  if (y.has(root, "fusion")) readFusionSection(y, root["fusion"], c);
+  ParameterTable ekf, fusion;
+  describeSlam(ekf, c.slam);
+  describeFusion(fusion, c);
+  ekf.read(y, root["ekf"], "ekf");
+  fusion.read(y, root["fusion"], "fusion");
   if (y.has(root, "laser_features")) readLaserFeatureSection(y, root["laser_features"], c.laser);
   c.fusion.odometry = c.slam.odometry;
   return c;

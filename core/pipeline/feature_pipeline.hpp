@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "config/parameter_table.hpp"
 #include "laser/laser_feature_extractor.hpp"
 #include "robot/robot_description.hpp"
 #include "slam/feature_slam.hpp"
@@ -50,6 +51,9 @@ struct FeaturePipelineConfig {
 /// The configuration that describes a robot: odometry model from its wheel base and wheel-error
 /// constants, laser error model, laser noise for the sonar selection gates, sonar accuracy floors.
 FeaturePipelineConfig configForRobot(const RobotDescription& robot, SlamSensors sensors);
+
+/// The `ekf:` and `fusion:` sections' keys, bound to `config` (config/ekf.yaml lists them all).
+void describeFeaturePipeline(ParameterTable& ekf, ParameterTable& fusion, FeaturePipelineConfig& config);
 
 /// Reads a robot file or an estimator file (see above); an empty path gives the default robot's
 /// configuration. Throws std::runtime_error "FILE:LINE: ...".

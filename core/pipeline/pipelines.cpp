@@ -23,4 +23,20 @@ const std::map<std::string, PipelineFactory>& pipelines() {
   return factories;
 }
 
+std::string effectiveConfigYaml(const std::string& pipeline, const PipelineOptions& o) {
+  ParameterTable table;
+  if (pipeline == "psm-slam") {
+    PsmSlamEstimatorConfig config = loadPsmSlamEstimatorConfig(o.config);
+    describePsmSlamEstimatorConfig(table, config);
+    return table.yaml();
+  }
+  if (pipeline == "ekf") {
+    FeaturePipelineConfig config = loadFeaturePipelineConfig(o.config, parseSlamSensors(o.sensors));
+    ParameterTable fusion;
+    describeFeaturePipeline(table, fusion, config);
+    return "ekf:\n" + table.yaml(2) + "fusion:\n" + fusion.yaml(2);
+  }
+  return {};
+}
+
 }  // namespace polarslam

@@ -19,4 +19,8 @@ using PipelineFactory = std::function<std::unique_ptr<Estimator>(const PipelineO
 /// name → factory; every pipeline adds itself in pipelines.cpp.
 const std::map<std::string, PipelineFactory>& pipelines();
 
+/// The parameters a pipeline would run with (its configuration file over the defaults), as the
+/// YAML its --config takes; "" for pipelines without parameters.
+std::string effectiveConfigYaml(const std::string& pipeline, const PipelineOptions& options);
+
 }  // namespace polarslam

@@ -1,9 +1,6 @@
 #include "pipeline/psm_slam_estimator.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <chrono>
-#include <stdexcept>
 
 #include "grid/grid_files.hpp"
 
@@ -23,24 +20,27 @@ nlohmann::json optimizationJson(const PoseGraphOptimizationSummary& s) {
 
 }  // namespace
 
+void describePsmSlamEstimatorConfig(ParameterTable& table, PsmSlamEstimatorConfig& c) {
+  describePsmSlamParams(table, c.slam);
+  ParameterTable& grid = table.section("grid", "the occupancy grid of the map");
+  grid.number("resolution", c.map.resolution, 0.005, 5.0, "m per cell");
+  grid.number("max_range", c.map.max_range, 0.0, 1000.0, "m: longer beams only clear space (0 = the laser's)");
+  grid.choice(
+      "scans", {"keyframes", "all"},
+      [&c](const std::string& w) {
+        c.map.all_scans = w == "all";
+        return true;
+      },
+      [&c] { return std::string(c.map.all_scans ? "all" : "keyframes"); }, "the reference scans, or every scan");
+}
+
 PsmSlamEstimatorConfig loadPsmSlamEstimatorConfig(const std::string& yaml_path) {
   PsmSlamEstimatorConfig config;
-  config.slam = loadPsmSlamParams(yaml_path, {"grid_resolution", "grid_max_range", "grid_scans"});
-  try {
-    const YAML::Node root = YAML::LoadFile(yaml_path);
-    if (root && root.IsMap()) {
-      if (root["grid_resolution"]) config.map.resolution = root["grid_resolution"].as<double>();
-      if (root["grid_max_range"]) config.map.max_range = root["grid_max_range"].as<double>();
-      if (root["grid_scans"]) {
-        const std::string which = root["grid_scans"].as<std::string>();
-        if (which != "keyframes" && which != "all") throw std::runtime_error("grid_scans must be 'keyframes' or 'all'");
-        config.map.all_scans = which == "all";
-      }
-    }
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(yaml_path + ": " + e.what());
-  }
-  if (!(config.map.resolution > 0.0)) throw std::runtime_error(yaml_path + ": grid_resolution must be positive");
+  if (yaml_path.empty()) return config;
+  const YamlFields yaml(yaml_path);
+  ParameterTable table;
+  describePsmSlamEstimatorConfig(table, config);
+  table.read(yaml, yaml.root(), "psm-slam");
   return config;
 }
 

@@ -6,10 +6,8 @@
 // published on PSM_SLAM_POSE at scan time) and final (each scan's pose relative to its reference
 // scan, as published on PSM_SLAM_ANCHORS, re-placed by the final graph).
 //
-// Configuration (`--config FILE`): the keys of PsmSlamParams (psm_slam_params.hpp) plus
-//   grid_resolution: 0.05     # m
-//   grid_max_range: 15        # m: beams only clear space up to this
-//   grid_scans: keyframes     # keyframes (the reference scans) | all
+// Configuration (`--config FILE`, e.g. config/psm-slam.yaml, which lists every key with its
+// default): the keys of PsmSlamParams (psm_slam_params.hpp) plus a `grid:` section.
 #include <nlohmann/json.hpp>
 
 #include <memory>
@@ -36,7 +34,10 @@ struct PsmSlamEstimatorConfig {
   PsmSlamMapOptions map;
 };
 
-/// Reads PsmSlamParams keys plus the grid_* keys above. Throws std::runtime_error naming the file.
+/// Every key of the configuration, bound to `config`.
+void describePsmSlamEstimatorConfig(ParameterTable& table, PsmSlamEstimatorConfig& config);
+/// Reads a configuration file (an empty path gives the defaults). Throws std::runtime_error
+/// "FILE:LINE: ..." for unknown keys, values out of range and syntax errors.
 PsmSlamEstimatorConfig loadPsmSlamEstimatorConfig(const std::string& yaml_path);
 
 class PsmSlamEstimator : public Estimator {

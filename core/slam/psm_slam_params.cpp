@@ -1,135 +1,122 @@
 #include "slam/psm_slam_params.hpp"
 
-#include <yaml-cpp/yaml.h>
-
-#include <functional>
-#include <map>
-#include <stdexcept>
-
 namespace polarslam {
 namespace {
 
-using Setter = std::function<void(const YAML::Node&)>;
-
-template <typename T>
-Setter set(T& field) {
-  return [&field](const YAML::Node& node) { field = node.as<T>(); };
+void describeMatcher(ParameterTable& t, PsmParams& p) {
+  t.number("max_range", p.max_range, 0.5, 100.0, "m: farther readings are not matched");
+  t.number("min_range", p.min_range, 0.0, 10.0, "m: nearer readings are not matched");
+  t.number("median_replace_threshold", p.median_replace_threshold, 0.0, 10.0,
+           "m: the median filter replaces a reading only when it differs more");
+  t.number("segment_max_distance", p.segment_max_distance, 0.01, 10.0, "m between neighbours of one segment");
+  t.integer("decimation", p.decimation, 1, 100, "keep every n-th beam");
+  t.integer("min_valid_points", p.min_valid_points, 3, 100000, "fewer usable readings: no match");
+  t.angle("search_window_deg", p.search_window, 0.5, 180.0, "orientation search window");
+  t.angle("initial_search_window_deg", p.initial_search_window, 0.5, 180.0, "first orientation step's window");
+  t.angle("coarse_search_step_deg", p.coarse_search_step, 0.0, 45.0, "coarse-to-fine step (0 = exhaustive)");
+  t.number("max_error", p.max_error, 0.01, 100.0, "m: residual gate");
+  t.integer("max_iterations", p.max_iterations, 1, 10000, "iterations at most");
+  t.number("stop_translation", p.stop_translation, 0.0, 1.0, "m: convergence test");
+  t.angle("stop_rotation_deg", p.stop_rotation, 0.0, 10.0, "convergence test");
+  t.choice(
+      "covariance", {"wls", "heuristic"}, [&p](const std::string& w) { return parseCovarianceModel(w, p.covariance); },
+      [&p] { return std::string(covarianceModelName(p.covariance)); }, "match covariance model");
+  t.number("wls_inflation", p.wls_inflation, 0.1, 100.0, "multiplies the WLS covariance");
 }
 
-std::map<std::string, Setter> psmSetters(PsmParams& p) {
-  return {
-      {"max_range", set(p.max_range)},
-      {"min_valid_points", set(p.min_valid_points)},
-      {"decimation", set(p.decimation)},
-      {"search_window", set(p.search_window)},
-      {"initial_search_window", set(p.initial_search_window)},
-      {"max_error", set(p.max_error)},
-      {"max_iterations", set(p.max_iterations)},
-      {"covariance", [&p](const YAML::Node& n) {
-         if (!parseCovarianceModel(n.as<std::string>(), p.covariance))
-           throw std::runtime_error("psm.covariance must be 'heuristic' or 'wls'");
-       }},
-  };
+void describeOdometry(ParameterTable& t, PoseIncrementErrorParams& p) {
+  t.number("k_distance", p.k_distance, 0.0, 1.0, "m²/m: distance variance per metre");
+  t.number("k_heading_per_rad", p.k_heading_per_rad, 0.0, 1.0, "rad²/rad: heading variance per radian turned");
+  t.number("k_heading_per_m", p.k_heading_per_m, 0.0, 1.0, "rad²/m: heading variance per metre travelled");
 }
 
-std::map<std::string, Setter> slamSetters(PsmSlamParams& p) {
-  return {
-      {"method", [&p](const YAML::Node& n) {
-         if (!parseMatchMethod(n.as<std::string>(), p.method))
-           throw std::runtime_error("method must be 'psm', 'psm-c' or 'icp'");
-       }},
-      {"time_noise_xy", set(p.time_noise_xy)},
-      {"time_noise_theta", set(p.time_noise_theta)},
-      {"match_cov_scale", set(p.match_cov_scale)},
-      {"odometry_check_translation", set(p.odometry_check_translation)},
-      {"odometry_check_rotation", set(p.odometry_check_rotation)},
-      {"min_match_sigma_xy", set(p.min_match_sigma_xy)},
-      {"min_match_sigma_theta", set(p.min_match_sigma_theta)},
-      {"max_error_index", set(p.max_error_index)},
-      {"min_overlap", set(p.min_overlap)},
-      {"chi2_gate", set(p.chi2_gate)},
-      {"max_odometry_fault_translation", set(p.max_odometry_fault_translation)},
-      {"max_odometry_fault_rotation", set(p.max_odometry_fault_rotation)},
-      {"keyframe_distance", set(p.keyframe_distance)},
-      {"keyframe_angle", set(p.keyframe_angle)},
-      {"keyframe_min_overlap", set(p.keyframe_min_overlap)},
-      {"reuse_fraction", set(p.reuse_fraction)},
-      {"max_filter_keyframes", set(p.max_filter_keyframes)},
-      {"filter_window", set(p.filter_window)},
-      {"skeleton_spacing", set(p.skeleton_spacing)},
-      {"skeleton_heading", set(p.skeleton_heading)},
-      {"odometry_k_distance", set(p.odometry.poses.k_distance)},
-      {"odometry_k_heading_per_rad", set(p.odometry.poses.k_heading_per_rad)},
-      {"odometry_k_heading_per_m", set(p.odometry.poses.k_heading_per_m)},
-
-      {"stationary_odometry_translation", set(p.stationary_odometry_translation)},
-      {"stationary_odometry_rotation", set(p.stationary_odometry_rotation)},
-      {"stationary_match_translation", set(p.stationary_match_translation)},
-      {"stationary_match_rotation", set(p.stationary_match_rotation)},
-      {"loop_search_radius", set(p.loop_search_radius)},
-      {"loop_max_heading_difference", set(p.loop_max_heading_difference)},
-      {"loop_candidate_sigmas", set(p.loop_candidate_sigmas)},
-      {"loop_min_keyframe_gap", set(p.loop_min_keyframe_gap)},
-      {"max_candidates_per_scan", set(p.max_candidates_per_scan)},
-      {"loop_max_error_index", set(p.loop_max_error_index)},
-      {"loop_min_overlap", set(p.loop_min_overlap)},
-      {"loop_guess_spacing", set(p.loop_guess_spacing)},
-      {"loop_max_guesses", set(p.loop_max_guesses)},
-      {"loop_ambiguity_distance", set(p.loop_ambiguity_distance)},
-      {"loop_ambiguity_ratio", set(p.loop_ambiguity_ratio)},
-      {"loop_ambiguity_heading", set(p.loop_ambiguity_heading)},
-      {"loop_search_window", set(p.loop_search_window)},
-      {"loop_chi2_gate", set(p.loop_chi2_gate)},
-      {"loop_confirm_sigma", set(p.loop_confirm_sigma)},
-      {"loop_confirm_scans", set(p.loop_confirm_scans)},
-      {"loop_confirm_translation", set(p.loop_confirm_translation)},
-      {"loop_confirm_rotation", set(p.loop_confirm_rotation)},
-      {"loop_confirmed_chi2_gate", set(p.loop_confirmed_chi2_gate)},
-      {"optimize_on_loop", set(p.optimize_on_loop)},
-      {"min_keyframes_between_optimizations", set(p.min_keyframes_between_optimizations)},
-      {"loop_loss_scale", set(p.graph.loop_loss_scale)},
-      {"outlier_chi2", set(p.graph.outlier_chi2)},
-  };
+void describePrediction(ParameterTable& t, PsmSlamParams& p) {
+  t.number("time_noise_xy", p.time_noise_xy, 0.0, 100.0, "m²/s: random walk on top of the odometry model");
+  t.number("time_noise_theta", p.time_noise_theta, 0.0, 100.0, "rad²/s: heading random walk");
+  t.number("no_odometry_noise_xy", p.no_odometry_noise_xy, 0.0, 1e4, "m²/s without odometry");
+  t.number("no_odometry_noise_theta", p.no_odometry_noise_theta, 0.0, 1e4, "rad²/s without odometry");
+  t.number("odometry_check_translation", p.odometry_check_translation, 0.0, 10.0,
+           "m: odometry and previous motion this far apart: match from both");
+  t.angle("odometry_check_rotation_deg", p.odometry_check_rotation, 0.0, 180.0, "the same for heading");
 }
 
-void apply(const YAML::Node& map, std::map<std::string, Setter> setters, const std::string& prefix) {
-  for (const auto& item : map) {
-    const std::string key = item.first.as<std::string>();
-    const auto it = setters.find(key);
-    if (it == setters.end()) throw std::runtime_error("unknown PSM SLAM parameter '" + prefix + key + "'");
-    try {
-      it->second(item.second);
-    } catch (const YAML::Exception& e) {
-      throw std::runtime_error("PSM SLAM parameter '" + prefix + key + "': " + e.what());
-    }
-  }
+void describeMatches(ParameterTable& t, PsmSlamParams& p) {
+  t.number("match_cov_scale", p.match_cov_scale, 0.01, 100.0, "multiplies the matcher's covariance");
+  t.number("min_match_sigma_xy", p.min_match_sigma_xy, 0.0, 10.0, "m: smallest match standard deviation");
+  t.angle("min_match_sigma_theta_deg", p.min_match_sigma_theta, 0.0, 45.0, "smallest heading standard deviation");
+  t.number("max_error_index", p.max_error_index, 0.0, 10.0, "m: mean residual of a good match at most");
+  t.number("min_overlap", p.min_overlap, 0.0, 1.0, "associated fraction of a good match at least");
+  t.number("chi2_gate", p.chi2_gate, 0.0, 1e6, "χ² gate on a tracking match's innovation");
+  t.number("max_odometry_fault_translation", p.max_odometry_fault_translation, 0.0, 100.0,
+           "m: a gated-out match this close to odometry or previous motion is an odometry fault");
+  t.angle("max_odometry_fault_rotation_deg", p.max_odometry_fault_rotation, 0.0, 180.0, "the same for heading");
+}
+
+void describeReferences(ParameterTable& t, PsmSlamParams& p) {
+  t.number("keyframe_distance", p.keyframe_distance, 0.01, 100.0, "m from the active reference scan: new one");
+  t.angle("keyframe_angle_deg", p.keyframe_angle, 0.1, 180.0, "from the active reference scan: new one");
+  t.number("keyframe_min_overlap", p.keyframe_min_overlap, 0.0, 1.0, "below this overlap: new reference");
+  t.number("reuse_fraction", p.reuse_fraction, 0.0, 1.0, "of the keyframe distances: reuse an old reference");
+  t.integer("filter_window", p.filter_window, 1, 100000, "recent reference scans kept in the filter");
+  t.number("skeleton_spacing", p.skeleton_spacing, 0.0, 1000.0, "m between older references kept in the filter");
+  t.angle("skeleton_heading_deg", p.skeleton_heading, 0.0, 360.0, "heading apart to keep both");
+  t.count("max_filter_keyframes", p.max_filter_keyframes, 2, 1000000, "reference scans in the filter at most");
+}
+
+void describeStationary(ParameterTable& t, PsmSlamParams& p) {
+  t.number("stationary_odometry_translation", p.stationary_odometry_translation, 0.0, 1.0,
+           "m between scans: odometry says still");
+  t.angle("stationary_odometry_rotation_deg", p.stationary_odometry_rotation, 0.0, 45.0, "the same for heading");
+  t.number("stationary_match_translation", p.stationary_match_translation, 0.0, 1.0, "m: the match agrees");
+  t.angle("stationary_match_rotation_deg", p.stationary_match_rotation, 0.0, 45.0, "the same for heading");
+}
+
+void describeLoops(ParameterTable& t, PsmSlamParams& p) {
+  t.number("loop_search_radius", p.loop_search_radius, 0.0, 1000.0, "m: loop-closure candidates within");
+  t.angle("loop_max_heading_difference_deg", p.loop_max_heading_difference, 0.0, 180.0, "candidates within");
+  t.number("loop_candidate_sigmas", p.loop_candidate_sigmas, 0.0, 100.0, "Mahalanobis neighbourhood");
+  t.integer("loop_min_keyframe_gap", p.loop_min_keyframe_gap, 1, 1000000, "ids older than the active: a loop");
+  t.integer("max_candidates_per_scan", p.max_candidates_per_scan, 1, 1000, "matches per reference decision");
+  t.number("loop_max_error_index", p.loop_max_error_index, 0.0, 10.0, "m: stricter than tracking");
+  t.number("loop_min_overlap", p.loop_min_overlap, 0.0, 1.0, "associated fraction at least");
+  t.number("loop_chi2_gate", p.loop_chi2_gate, 0.0, 1e6, "χ² gate against the prediction");
+  t.number("loop_confirm_sigma", p.loop_confirm_sigma, 0.0, 1000.0, "m: wider priors need a second closure");
+  t.integer("loop_confirm_scans", p.loop_confirm_scans, 1, 100000, "the second within this many scans");
+  t.number("loop_confirm_translation", p.loop_confirm_translation, 0.0, 100.0, "m: agreeing on the motion");
+  t.angle("loop_confirm_rotation_deg", p.loop_confirm_rotation, 0.0, 180.0, "the same for heading");
+  t.number("loop_confirmed_chi2_gate", p.loop_confirmed_chi2_gate, 0.0, 1e9, "χ² gate once confirmed");
+  t.number("loop_guess_spacing", p.loop_guess_spacing, 0.01, 100.0, "m between wide-search initial guesses");
+  t.integer("loop_max_guesses", p.loop_max_guesses, 1, 10000, "wide-search guesses at most");
+  t.number("loop_ambiguity_distance", p.loop_ambiguity_distance, 0.0, 1000.0, "m: another fit this far away ...");
+  t.number("loop_ambiguity_ratio", p.loop_ambiguity_ratio, 1.0, 1000.0, "... this nearly as good: ambiguous");
+  t.angle("loop_ambiguity_heading_deg", p.loop_ambiguity_heading, 0.0, 180.0, "... at about this heading");
+  t.angle("loop_search_window_deg", p.loop_search_window, 0.5, 180.0, "matcher orientation window for loops");
+}
+
+void describeGraph(ParameterTable& t, PsmSlamParams& p) {
+  t.boolean("optimize_on_loop", p.optimize_on_loop, "optimise the pose graph after loop closures");
+  t.integer("min_keyframes_between_optimizations", p.min_keyframes_between_optimizations, 0, 1000000,
+            "new reference scans between optimisations at least");
+  t.number("loop_loss_scale", p.graph.loop_loss_scale, 0.01, 1000.0, "σ: Cauchy loss on loop edges");
+  t.number("outlier_chi2", p.graph.outlier_chi2, 0.0, 1e9, "loop edges above this χ² are deactivated");
+  t.integer("max_iterations", p.graph.max_iterations, 1, 100000, "Ceres iterations at most");
+  t.integer("max_outlier_rounds", p.graph.max_outlier_rounds, 0, 100, "re-solves after deactivating edges");
 }
 
 }  // namespace
 
-PsmSlamParams loadPsmSlamParams(const std::string& yaml_path, const std::set<std::string>& other_keys) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(yaml_path);
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(yaml_path + ": " + e.what());
-  }
-  PsmSlamParams params;
-  if (!root || root.IsNull()) return params;
-  if (!root.IsMap()) throw std::runtime_error(yaml_path + ": expected a map of parameters");
-  YAML::Node top = YAML::Clone(root);
-  if (root["psm"]) {
-    if (!root["psm"].IsMap()) throw std::runtime_error(yaml_path + ": 'psm' must be a map");
-    apply(root["psm"], psmSetters(params.psm), "psm.");
-    top.remove("psm");
-  }
-  for (const std::string& key : other_keys) top.remove(key);
-  try {
-    apply(top, slamSetters(params), "");
-  } catch (const std::runtime_error& e) {
-    throw std::runtime_error(yaml_path + ": " + e.what());
-  }
-  return params;
+void describePsmSlamParams(ParameterTable& table, PsmSlamParams& p) {
+  table.choice(
+      "method", {"psm", "psm-c", "icp"}, [&p](const std::string& w) { return parseMatchMethod(w, p.method); },
+      [&p] { return std::string(methodName(p.method)); }, "scan matcher");
+  describePrediction(table.section("prediction", "motion between scans"), p);
+  describeOdometry(table.section("odometry", "odometry pose-increment error model"), p.odometry.poses);
+  describeMatches(table.section("matches", "which matches the filter takes"), p);
+  describeReferences(table.section("reference_scans", "reference scans (keyframes)"), p);
+  describeStationary(table.section("stationary", "a robot standing still"), p);
+  describeLoops(table.section("loop_closure", "loop closures"), p);
+  describeGraph(table.section("graph", "global pose-graph optimisation"), p);
+  describeMatcher(table.section("psm", "the polar scan matcher"), p.psm);
 }
 
 }  // namespace polarslam

@@ -1,10 +1,10 @@
 #pragma once
 // Parameters of PSM SLAM (psm_slam.hpp), SI units and radians. Defaults were tuned on the MIT
-// CSAIL log and checked on the simulated office (README-psm-slam.md).
-#include <set>
+// CSAIL log and checked on the simulated office (docs/algorithms.md).
 #include <string>
 
 #include "odometry/odometry_model.hpp"
+#include "config/parameter_table.hpp"
 #include "scanmatch/psm_params.hpp"
 #include "slam/pose_graph.hpp"
 
@@ -126,10 +126,8 @@ struct PsmSlamParams {
   int min_keyframes_between_optimizations = 15;
 };
 
-/// Reads parameters from a YAML file (flat keys named as the fields above, plus `psm:` with
-/// max_range, search_window, initial_search_window, min_valid_points, decimation, covariance);
-/// unknown keys throw std::runtime_error naming them, so typos do not pass silently; keys in
-/// `other_keys` are left for the caller.
-PsmSlamParams loadPsmSlamParams(const std::string& yaml_path, const std::set<std::string>& other_keys = {});
+/// Every parameter above as a configuration key (the keys of config/psm-slam.yaml, angles in
+/// degrees), bound to `params`.
+void describePsmSlamParams(ParameterTable& table, PsmSlamParams& params);
 
 }  // namespace polarslam

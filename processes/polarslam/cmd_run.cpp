@@ -21,6 +21,7 @@ struct RunOptions {
   std::string log, pipeline = "odometry", out;
   PipelineOptions pipeline_options;
   SensorChannelNames channels;
+  bool print_config = false;
 };
 
 /// Ground truth re-expressed in the robot's starting frame, which is the map frame of every estimator.
@@ -99,6 +100,11 @@ nlohmann::json processesJson(const std::map<std::string, ProcessCounts>& process
 }
 
 void runPipeline(RunOptions o) {
+  if (o.print_config) {
+    std::cout << effectiveConfigYaml(o.pipeline, o.pipeline_options);
+    return;
+  }
+  if (o.log.empty() || o.out.empty()) throw CLI::RequiredError("--log and --out");
   const auto& factories = pipelines();
   const auto factory = factories.find(o.pipeline);
   if (factory == factories.end()) throw std::runtime_error("unknown pipeline '" + o.pipeline + "'");
@@ -171,12 +177,13 @@ void setupRun(CLI::App& sub) {
   auto o = std::make_shared<RunOptions>();
   std::vector<std::string> names;
   for (const auto& [name, factory] : pipelines()) names.push_back(name);
-  sub.add_option("--log", o->log, "LCM log with LASER, SONAR, ODOMETRY (and GROUND_TRUTH)")->required()->check(CLI::ExistingFile);
+  sub.add_option("--log", o->log, "LCM log with LASER, SONAR, ODOMETRY (and GROUND_TRUTH)")->check(CLI::ExistingFile);
+  sub.add_flag("--print-config", o->print_config, "print the parameters the pipeline would use (YAML) and exit");
   sub.add_option("--pipeline", o->pipeline, "estimator to run")->check(CLI::IsMember(names))->capture_default_str();
   sub.add_option("--sensors", o->pipeline_options.sensors, "features for feature SLAM")
       ->check(CLI::IsMember({"laser", "sonar", "fused"}))->capture_default_str();
   sub.add_option("--config", o->pipeline_options.config, "estimator parameters (YAML)")->check(CLI::ExistingFile);
-  sub.add_option("--out", o->out, "output folder")->required();
+  sub.add_option("--out", o->out, "output folder");
   sub.add_option("--laser-channel", o->channels.laser)->capture_default_str();
   sub.add_option("--sonar-channel", o->channels.sonar)->capture_default_str();
   sub.add_option("--odometry-channel", o->channels.odometry)->capture_default_str();

@@ -193,7 +193,7 @@ void runMitCsail(const std::string& log_path, const std::string& relations_path,
     any = true;
   }
   const double duration = 1e-6 * static_cast<double>(last - first);
-  const PsmSlamParams params = config.empty() ? PsmSlamParams{} : loadPsmSlamParams(config);
+  const PsmSlamParams params = loadPsmSlamEstimatorConfig(config).slam;
 
   std::vector<PoseStamped> online;
   std::vector<Result> results{runOdometry(log), runLaserOdometry(log), runPsmSlam(log, params, online)};

@@ -247,21 +247,5 @@ TEST(PsmSlam, ScansWithoutOdometryStillTrack) {
   EXPECT_LT(maxPositionError(trajectory, std::vector<Pose2>(run.truth.begin(), run.truth.begin() + n)), 0.15);
 }
 
-TEST(PsmSlam, ParametersLoadFromYamlAndTyposAreRejected) {
-  const std::string dir = ::testing::TempDir();
-  const std::string good = dir + "/psm_slam_good.yaml", bad = dir + "/psm_slam_bad.yaml";
-  {
-    std::ofstream(good) << "keyframe_distance: 0.8\nloop_search_radius: 3.5\npsm:\n  max_range: 12\n  covariance: heuristic\n";
-    std::ofstream(bad) << "keyframe_distanse: 0.8\n";
-  }
-  const PsmSlamParams p = loadPsmSlamParams(good);
-  EXPECT_DOUBLE_EQ(p.keyframe_distance, 0.8);
-  EXPECT_DOUBLE_EQ(p.loop_search_radius, 3.5);
-  EXPECT_DOUBLE_EQ(p.psm.max_range, 12.0);
-  EXPECT_EQ(p.psm.covariance, CovarianceModel::Heuristic);
-  EXPECT_THROW(loadPsmSlamParams(bad), std::runtime_error);
-  EXPECT_THROW(loadPsmSlamParams(dir + "/does_not_exist.yaml"), std::runtime_error);
-}
-
 }  // namespace
 }  // namespace polarslam
