@@ -21,10 +21,8 @@
 #include "common/path_messages.hpp"
 #include "common/pose_graph_message.hpp"
 #include "common/process_context.hpp"
-#include "grid/graph_scan_store.hpp"
-#include "grid/grid_outputs.hpp"
-#include "grid/planner.hpp"
-#include "pipeline/psm_slam_estimator.hpp"
+#include "grid/goal_planner.hpp"
+#include "pipeline/live_grid.hpp"
 #include "polarslam/goal_t.hpp"
 #include "polarslam/grid_request_t.hpp"
 #include "polarslam/grid_status_t.hpp"
@@ -35,8 +33,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-enum class GridSource { Ekf, PsmSlam };
-
 struct Channels {
   std::string laser = "LASER", anchors = "SCAN_ANCHORS", map = "SLAM_MAP", pose = "SLAM_POSE",
               psm_anchors = "PSM_SLAM_ANCHORS", graph = "PSM_SLAM_GRAPH", request = "GRID_REQUEST", goal = "GOAL",
@@ -44,15 +40,12 @@ struct Channels {
 };
 
 struct Options {
-  GridSource source = GridSource::Ekf;
+  LiveGridOptions grid;
   std::string out_dir = "grid";
   double period = 1.0;         ///< s between rebuilds (and GRID_MAP messages) while the map changes; 0 = on request
   double write_period = 10.0;  ///< s between file writes (0 = only on GRID_REQUEST and exit)
   double goal_tolerance = 0.2;
   bool compress = true;
-  GridOutputOptions grid;
-  ScanStoreOptions store;
-  PsmSlamMapOptions psm_map;
   PlannerOptions planner;
   Channels channels;
 };
@@ -61,38 +54,11 @@ Clock::duration secondsToDuration(double s) {
   return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
 }
 
-/// One rebuilt grid, whichever SLAM it came from.
-struct BuiltGrid {
-  OccupancyGrid grid;
-  GridSlice slice;
-  GridPicture picture;
-  int scans = 0;
-  std::vector<int64_t> utimes;                  ///< ekf: scan utimes of `regenerated`
-  std::vector<RegeneratedPose> regenerated;     ///< ekf only
-  RegenerationSummary summary;                  ///< ekf only
-  double regenerate_seconds = 0.0, build_seconds = 0.0;
-};
-
 struct BuildOutcome {
   std::optional<BuiltGrid> result;
   std::string written_dir, error;  ///< written_dir empty: files not written this time
   double write_seconds = 0.0;
 };
-
-BuiltGrid buildFromAnchors(const std::vector<AnchoredScan>& scans, const FeatureMap& map,
-                           const GridOutputOptions& options) {
-  RegeneratedGrid r = regenerateGrid(scans, map, options);
-  GridPicture picture = gridPictureOf(r, map);
-  return {std::move(r.grid),   std::move(r.slice), std::move(picture), static_cast<int>(scans.size()),
-          std::move(r.utimes), std::move(r.poses), r.summary, r.regenerate_seconds, r.build_seconds};
-}
-
-BuiltGrid buildFromGraph(const GraphScanStore& store, const PoseGraph& graph, const GridOptions& options) {
-  GraphGrid g = buildGraphGrid(store, graph, options);
-  GridPicture picture = graphGridPicture(g, graph);
-  return {std::move(g.grid), std::move(g.slice), std::move(picture), static_cast<int>(store.size()), {}, {}, {}, 0.0,
-          g.build_seconds};
-}
 
 /// Builds with `build` and, when `out_dir` is not empty, writes the files.
 BuildOutcome buildAndWrite(const std::function<BuiltGrid()>& build, const std::string& out_dir) {
@@ -115,31 +81,34 @@ BuildOutcome buildAndWrite(const std::function<BuiltGrid()>& build, const std::s
 class GridNode {
  public:
   GridNode(ProcessContext& context, Options options)
-      : context_(context), o_(std::move(options)), store_(o_.store), graph_store_(o_.psm_map.all_scans) {}
+      : context_(context), o_(std::move(options)), grid_(o_.grid), planner_(o_.planner, o_.goal_tolerance) {}
 
   void subscribe() {
     const Channels& c = o_.channels;
-    if (o_.source == GridSource::Ekf) {
-      context_.subscribeConverted<polarslam::laser_scan_t, LaserScan>(c.laser, [this](LaserScan& s) {
-        store_.addScan(std::move(s));
-        context_.handled();
-      });
+    context_.subscribeConverted<polarslam::laser_scan_t, LaserScan>(c.laser, [this](LaserScan& s) {
+      grid_.addScan(std::move(s));
+      context_.handled();
+    });
+    if (grid_.source() == GridSource::EkfAnchors) {
       context_.subscribeConverted<polarslam::scan_anchors_t, ScanAnchors>(c.anchors, [this](ScanAnchors& a) {
-        robot_ = a.pose.pose;
-        store_.addAnchors(std::move(a));
+        updateRobot(a.pose.pose);
+        grid_.addScanAnchors(std::move(a));
         context_.handled();
       });
-      context_.subscribeConverted<polarslam::slam_map_t, FeatureMap>(c.map, [this](FeatureMap& m) { onMap(m); });
+      context_.subscribeConverted<polarslam::slam_map_t, FeatureMap>(c.map, [this](FeatureMap& m) {
+        updateRobot(m.robot.pose);
+        grid_.setFeatureMap(std::move(m));
+        context_.handled();
+      });
     } else {
-      context_.subscribeConverted<polarslam::laser_scan_t, LaserScan>(c.laser, [this](LaserScan& s) {
-        graph_store_.addScan(std::move(s));
-        context_.handled();
-      });
       context_.subscribeConverted<polarslam::anchored_pose_t, AnchoredPose>(c.psm_anchors, [this](AnchoredPose& a) {
-        graph_store_.addAnchor(a);
+        grid_.addAnchoredPose(a);
         context_.handled();
       });
-      context_.subscribeConverted<polarslam::pose_graph_t, PoseGraph>(c.graph, [this](PoseGraph& g) { onGraph(g); });
+      context_.subscribeConverted<polarslam::pose_graph_t, PoseGraph>(c.graph, [this](PoseGraph& g) {
+        grid_.setPoseGraph(std::move(g));
+        context_.handled();
+      });
     }
     context_.subscribe<polarslam::pose_t>(c.pose, [this](const auto& msg) { onPose(msg); });
     context_.subscribe<polarslam::grid_request_t>(c.request, [this](const auto& msg) { onRequest(msg); });
@@ -149,7 +118,7 @@ class GridNode {
   void tick() {
     collectBuild();
     const auto now = Clock::now();
-    if (o_.period > 0.0 && changed() && now >= next_build_) {
+    if (o_.period > 0.0 && grid_.changed() && now >= next_build_) {
       const bool write = o_.write_period > 0.0 && now >= next_write_;
       if (startBuild(write ? o_.out_dir : "")) {
         next_build_ = now + secondsToDuration(o_.period);
@@ -166,8 +135,8 @@ class GridNode {
   void finish() {
     if (job_.valid()) job_.wait();
     collectBuild();
-    if (storedScans() == 0) return;
-    if (changed() || written_version_ != built_version_) {
+    if (grid_.storedScans() == 0) return;
+    if (grid_.changed() || !written_latest_) {
       startBuild(o_.out_dir);
       if (job_.valid()) job_.wait();
       collectBuild();
@@ -175,35 +144,15 @@ class GridNode {
   }
 
  private:
-  size_t storedScans() const { return o_.source == GridSource::Ekf ? store_.size() : graph_store_.size(); }
-  uint64_t dataVersion() const {
-    return (o_.source == GridSource::Ekf ? store_.version() : graph_store_.version()) + input_changes_;
-  }
-  bool changed() const { return storedScans() > 0 && dataVersion() != built_version_; }
-
-  void onMap(FeatureMap& map) {
-    map_ = std::move(map);
-    robot_ = map_.robot.pose;
-    ++input_changes_;
-    context_.handled();
-  }
-
-  void onGraph(PoseGraph& graph) {
-    graph_ = std::move(graph);
-    ++input_changes_;
-    context_.handled();
-  }
-
   void onPose(const polarslam::pose_t& msg) {
     PoseStamped pose;
     if (const std::string why = fromLcm(msg, pose); !why.empty()) return context_.reject(why);
-    robot_ = pose.pose;
     context_.handled();
-    if (goal_ && (robot_->translation() - goal_->head<2>()).norm() < o_.goal_tolerance) {
-      goal_.reset();
-      plan_state_ = "reached";
-      publishStatus();
-    }
+    updateRobot(pose.pose);
+  }
+
+  void updateRobot(const Pose2& pose) {
+    if (planner_.updateRobot(pose)) publishStatus();
   }
 
   void onRequest(const polarslam::grid_request_t& msg) {
@@ -214,31 +163,19 @@ class GridNode {
   }
 
   void onGoal(const polarslam::goal_t& msg) {
-    if (!std::isfinite(msg.x) || !std::isfinite(msg.y) || std::abs(msg.x) > 1e6 || std::abs(msg.y) > 1e6) {
-      context_.reject("goal: non-finite or absurd position");
-      return;
-    }
+    std::optional<GoalPlan> plan;
+    if (const std::string why = planner_.setGoal(Vec2(msg.x, msg.y), msg.utime, plan); !why.empty())
+      return context_.reject(why);
     context_.handled();
-    goal_ = Vec3(msg.x, msg.y, msg.theta);
-    goal_utime_ = msg.utime;
-    if (slice_) plan();
-    else if (!job_.valid() && storedScans() > 0) startBuild("");
-    else plan_state_ = "waiting for a grid";
+    if (!planner_.hasGrid() && !job_.valid() && grid_.storedScans() > 0) startBuild("");
+    publishPlan(plan);
   }
 
   /// Starts a build of the current data (copied for the worker); false if one is running.
   bool startBuild(const std::string& write_dir) {
-    if (job_.valid() || storedScans() == 0) return false;
-    building_version_ = dataVersion();
+    if (job_.valid() || grid_.storedScans() == 0) return false;
     state_ = "building";
-    std::function<BuiltGrid()> build;
-    if (o_.source == GridSource::Ekf)
-      build = [scans = store_.scans(), map = map_, options = o_.grid] { return buildFromAnchors(scans, map, options); };
-    else
-      build = [store = graph_store_, graph = graph_, options = gridOptions(o_.psm_map)] {
-        return buildFromGraph(store, graph, options);
-      };
-    job_ = std::async(std::launch::async, buildAndWrite, std::move(build), write_dir);
+    job_ = std::async(std::launch::async, buildAndWrite, grid_.build(), write_dir);
     return true;
   }
 
@@ -246,7 +183,6 @@ class GridNode {
     if (!job_.valid() || job_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
     BuildOutcome outcome = job_.get();
     if (outcome.result) {
-      built_version_ = building_version_;
       onBuilt(std::move(outcome));
     } else {
       state_ = "failed";
@@ -266,54 +202,37 @@ class GridNode {
     BuiltGrid& r = *outcome.result;
     state_ = outcome.written_dir.empty() ? "built" : "written";
     error_.clear();
-    if (!outcome.written_dir.empty()) {
+    written_latest_ = !outcome.written_dir.empty();
+    if (written_latest_) {
       written_dir_ = outcome.written_dir;
       written_utime_ = nowUtime();
       write_seconds_ = outcome.write_seconds;
-      written_version_ = built_version_;
     }
-    const char* source = o_.source == GridSource::Ekf ? "ekf-anchors" : "psm-graph";
-    context_.publish(o_.channels.grid_map, toLcmGridMap(r.slice, nowUtime(), grid_seq_++, source, r.scans, o_.compress));
-    if (o_.source == GridSource::Ekf)
+    const bool ekf = grid_.source() == GridSource::EkfAnchors;
+    context_.publish(o_.channels.grid_map,
+                     toLcmGridMap(r.slice, nowUtime(), grid_seq_++, ekf ? "ekf-anchors" : "psm-graph", r.scans, o_.compress));
+    if (ekf)
       context_.publish(o_.channels.grid_path, toLcmPath(r.utimes, r.regenerated, nowUtime(), path_seq_++));
-    slice_ = r.slice;
+    const bool had_goal = planner_.hasGoal();
+    const std::optional<GoalPlan> plan = planner_.updateGrid(r.slice);
     last_ = std::move(outcome.result);
-    if (goal_) plan();
+    if (had_goal) publishPlan(plan);
   }
 
-  void plan() {
-    if (!goal_ || !slice_) return;
-    if (!robot_) {
-      plan_state_ = "failed: no SLAM pose yet";
-      return;
-    }
-    const PlanResult plan = planPath(*slice_, robot_->translation(), goal_->head<2>(), o_.planner);
-    plan_length_ = plan.length;
-    if (!plan.found) {
-      plan_state_ = "failed: " + plan.failure;
-    } else {
-      plan_state_ = plan.goal_exact ? "planned" : "planned to nearest reachable point";
+  void publishPlan(const std::optional<GoalPlan>& plan) {
+    if (plan)
       context_.publish(o_.channels.planned_path,
-                       toLcmPath(plan.waypoints, goal_utime_, plan.goal_exact, nowUtime(), plan_seq_++));
-    }
+                       toLcmPath(plan->waypoints, plan->goal_utime, plan->goal_exact, nowUtime(), plan_seq_++));
     publishStatus();
   }
 
   void fillStoreStatus(polarslam::grid_status_t& s) const {
-    if (o_.source == GridSource::Ekf) {
-      const ScanStoreStatistics& st = store_.statistics();
-      s.scans_stored = static_cast<int32_t>(store_.size());
-      s.scans_received = st.scans_received;
-      s.anchors_received = st.anchors_received;
-      s.unpaired_dropped = st.unpaired_dropped;
-      s.store_bytes = static_cast<int64_t>(store_.memoryBytes());
-    } else {
-      const GraphScanStoreStatistics& st = graph_store_.statistics();
-      s.scans_stored = static_cast<int32_t>(graph_store_.size());
-      s.scans_received = st.scans_received;
-      s.anchors_received = st.anchors_received;
-      s.unpaired_dropped = st.unpaired_dropped;
-    }
+    const LiveGridCounts c = grid_.counts();
+    s.scans_stored = static_cast<int32_t>(c.scans_stored);
+    s.scans_received = c.scans_received;
+    s.anchors_received = c.anchors_received;
+    s.unpaired_dropped = c.unpaired_dropped;
+    s.store_bytes = c.store_bytes;
   }
 
   void fillGridStatus(polarslam::grid_status_t& s) const {
@@ -348,32 +267,25 @@ class GridNode {
     s.written_utime = written_utime_;
     fillStoreStatus(s);
     fillGridStatus(s);
-    s.plan_state = plan_state_;
-    s.plan_length_m = plan_length_;
+    s.plan_state = planner_.state();
+    s.plan_length_m = planner_.planLength();
     context_.publish(o_.channels.status, s);
   }
 
   ProcessContext& context_;
   Options o_;
-  AnchoredScanStore store_;
-  FeatureMap map_;
-  GraphScanStore graph_store_;
-  PoseGraph graph_;
-  uint64_t input_changes_ = 0;  ///< maps and graphs received
-  std::optional<Pose2> robot_;
-  std::optional<Vec3> goal_;
-  int64_t goal_utime_ = 0;
+  LiveGrid grid_;
+  GoalPlanner planner_;
 
   std::future<BuildOutcome> job_;
   std::optional<std::string> queued_request_;
-  uint64_t building_version_ = 0, built_version_ = 0, written_version_ = 0;
+  bool written_latest_ = false;  ///< the files hold the latest build
   Clock::time_point next_build_{}, next_write_{}, next_status_{};
   std::optional<BuiltGrid> last_;
-  std::optional<GridSlice> slice_;
 
-  std::string state_ = "waiting", error_, written_dir_, plan_state_ = "none";
+  std::string state_ = "waiting", error_, written_dir_;
   int64_t written_utime_ = 0;
-  double write_seconds_ = 0.0, plan_length_ = 0.0;
+  double write_seconds_ = 0.0;
   int64_t grid_seq_ = 0, path_seq_ = 0, plan_seq_ = 0, status_seq_ = 0;
 };
 
@@ -407,13 +319,13 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--write-period", o.write_period, "s between file writes (0 = only on GRID_REQUEST and exit)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
-  app.add_option("--resolution", o.grid.grid.resolution, "ekf: m per cell")->check(CLI::Range(0.005, 5.0))
+  app.add_option("--resolution", o.grid.ekf.grid.resolution, "ekf: m per cell")->check(CLI::Range(0.005, 5.0))
       ->capture_default_str();
-  app.add_option("--max-range", o.grid.grid.max_range, "ekf: m; longer beams only clear space (0 = laser range_max)")
+  app.add_option("--max-range", o.grid.ekf.grid.max_range, "ekf: m; longer beams only clear space (0 = laser range_max)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
-  app.add_option("--capacity", o.store.capacity, "ekf: scans kept at most (then thinned)")
+  app.add_option("--capacity", o.grid.store.capacity, "ekf: scans kept at most (then thinned)")
       ->check(CLI::Range(2, 10000000))->capture_default_str();
-  app.add_option("--min-translation", o.store.min_translation, "ekf: m the robot moves between kept scans")
+  app.add_option("--min-translation", o.grid.store.min_translation, "ekf: m the robot moves between kept scans")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--robot-radius", o.planner.robot_radius, "m, planner inflation")->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -424,13 +336,13 @@ int main(int argc, char** argv) {
   JournalOptions journal;
   addJournalOptions(app, journal);
   CLI11_PARSE(app, argc, argv);
-  o.planner.comfort_distance = std::max(o.planner.comfort_distance, 2.0 * o.planner.robot_radius);
 
   try {
-    o.source = source == "ekf" ? GridSource::Ekf : GridSource::PsmSlam;
-    if (o.source == GridSource::PsmSlam && app.count("--pose-channel") == 0) o.channels.pose = "PSM_SLAM_POSE";
-    if (!config.empty()) o.psm_map = loadPsmSlamEstimatorConfig(config).map;
-    ProcessContext context(o.source == GridSource::Ekf ? "polarslam-grid" : "polarslam-grid-psm", url);
+    const bool ekf = source == "ekf";
+    o.grid.source = ekf ? GridSource::EkfAnchors : GridSource::PsmGraph;
+    if (!ekf && app.count("--pose-channel") == 0) o.channels.pose = "PSM_SLAM_POSE";
+    if (!config.empty()) o.grid.psm_map = loadPsmSlamEstimatorConfig(config).map;
+    ProcessContext context(ekf ? "polarslam-grid" : "polarslam-grid-psm", url);
     context.enableJournal(journal);
     GridNode node(context, o);
     node.subscribe();
