@@ -1,5 +1,5 @@
 #pragma once
-// The relation-based metric of Kümmerle et al. 2009 (data/README.md, notes §20.1), written from
+// The relation-based metric of Kümmerle et al. 2009 (data/README.md, docs/algorithms.md §20.1), written from
 // its definition: for each relation (t1, t2, δ*), take the estimated poses T̂1, T̂2 nearest in
 // time to t1 and t2, form d = v(T̂1⁻¹·T̂2) − v(δ*) with v = (x, y, z, roll, pitch, yaw) and the
 // angles wrapped, and summarise the translational error √(dx² + dy² + dz²) in metres and the

@@ -1,6 +1,6 @@
 #pragma once
 // Time look-up in a trajectory: nearest pose within a tolerance, or interpolation between the
-// poses on either side. Real logs are not always time-ordered (notes §20.3), so the poses are
+// poses on either side. Real logs are not always time-ordered (docs/algorithms.md §20.3), so the poses are
 // sorted here, for look-up only (stable: of equal timestamps, the first one written wins).
 #include <cstdint>
 #include <optional>

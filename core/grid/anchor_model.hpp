@@ -1,6 +1,6 @@
 #pragma once
 // The App. B observation models h(x_v, y) (map feature seen from a robot pose) with their
-// Jacobians, as pose regeneration needs them (notes §17.8; line flip convention included).
+// Jacobians, as pose regeneration needs them (docs/algorithms.md §17.8; line flip convention included).
 #include "slam/feature_map.hpp"
 
 namespace polarslam {

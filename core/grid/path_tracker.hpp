@@ -1,5 +1,5 @@
 #pragma once
-// Path tracking against the SLAM map (thesis §3.7.1, notes §17.11): a planned path lives in the
+// Path tracking against the SLAM map (thesis §3.7.1, docs/algorithms.md §17.11): a planned path lives in the
 // map frame, and the robot knows where it is in that frame only through its SLAM estimate. The
 // tracker keeps the progress along the path from the estimated pose and hands a low-level
 // follower (which drives in some other frame: odometry, or the simulator's world frame) the

@@ -1,5 +1,5 @@
 #pragma once
-// Pose regeneration (thesis §3.7.2, notes §17.10): a scan's pose is re-solved in the *current*
+// Pose regeneration (thesis §3.7.2, docs/algorithms.md §17.10): a scan's pose is re-solved in the *current*
 // SLAM map by weighted least squares of the features stored with it (robot-frame observations
 // at scan time) against those features' current map estimates:
 //   x* = argmin Σ_i (z_i − h(x, y_i))ᵀ (R_i + H_y P_i H_yᵀ)⁻¹ (z_i − h(x, y_i))

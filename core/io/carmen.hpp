@@ -1,5 +1,5 @@
 #pragma once
-// CARMEN log reader (algorithm notes §20.2–§20.3, data README): FLASER, ROBOTLASER1 and ODOM lines
+// CARMEN log reader (docs/algorithms.md §20.2–§20.3, data README): FLASER, ROBOTLASER1 and ODOM lines
 // become LaserScan and OdometryReading events, in file order (never sorted: real logs step back
 // in time and relations refer to the exact stamps). Timestamps are the lines' ipc_timestamp in µs.
 // Malformed lines are counted with their line numbers and skipped; they are never fatal.

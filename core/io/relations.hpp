@@ -1,5 +1,5 @@
 #pragma once
-// Relations files of Kümmerle et al. 2009 (notes §20.1): one relation per line,
+// Relations files of Kümmerle et al. 2009 (docs/algorithms.md §20.1): one relation per line,
 // `t1 t2 x y z roll pitch yaw`, the rigid motion from the pose at t1 to the pose at t2 in the
 // frame of the pose at t1. Timestamps are the log's ipc_timestamp in seconds.
 #include <cstdint>

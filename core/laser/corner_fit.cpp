@@ -16,7 +16,7 @@ using Vec3Row = Eigen::Matrix<double, 3, 1>;
 
 /// Normal equations of the linearised corner at one estimate: rows of H are
 ///   arm 1: [d₁ sin(α − φ)/cos²(α − φ), 1/cos(α − φ), 0]
-///   arm 2: [d₂ sin(α₂ − φ)/cos²(α₂ − φ), 0, 1/cos(α₂ − φ)]      (notes §16.10, cf. (2.21))
+///   arm 2: [d₂ sin(α₂ − φ)/cos²(α₂ − φ), 0, 1/cos(α₂ − φ)]      (docs/algorithms.md §16.10, cf. (2.21))
 struct CornerNormalEquations {
   Mat3 hth = Mat3::Zero();
   Vec3 hte = Vec3::Zero();

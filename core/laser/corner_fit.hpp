@@ -1,10 +1,10 @@
 #pragma once
 // Right-angle corner fitting in the laser's polar coordinates (thesis §2.4; the section is
-// missing from the excerpt, reconstruction of notes §16.10). The two arms share one angle: arm 1
+// missing from the excerpt, reconstruction of docs/algorithms.md §16.10). The two arms share one angle: arm 1
 // is the line (α, d₁), arm 2 the line (α + t·π/2, d₂) with t = ±1, and (α, d₁, d₂) is found by
 // iterated linear regression on the range residuals exactly as for lines (2.20)–(2.23).
 //
-// Observation (notes §17.8): apex (x, y) and orientation γ, the direction of the corner's
+// Observation (docs/algorithms.md §17.8): apex (x, y) and orientation γ, the direction of the corner's
 // bisector pointing from the apex into free space, with covariance of (x, y, γ).
 #include <numbers>
 #include <span>

@@ -78,12 +78,12 @@ double quantizationPerturbation(double range, double quantum, double amplitude, 
 /// the in-plane axis at bearing ψ; against a vertical wall the beam at encoder angle φ travels
 ///   ξ = r·(ε²/2)·(1 − cos(φ − ψ)·cos(α − ψ)/cos(α − φ))
 /// further (second order in ε; exact: d/(cos ε·cos(α−φ) + (1−cos ε)·cos(φ−ψ)·cos(α−ψ)) − r).
-/// notes §16.10 gives r·e²/2 with e = ε·sin(φ−ψ), which omits the change of the beam's
+/// docs/algorithms.md §16.10 gives r·e²/2 with e = ε·sin(φ−ψ), which omits the change of the beam's
 /// azimuth and is wrong by a factor up to 2 (it predicts an error where there is none for a
 /// wall whose normal is the tilt axis).
 double planeTiltPerturbation(double alpha, double bearing, double range, double tilt, double tilt_axis);
 
-/// Motion during the scan (thesis §2.3.9, notes §16.10): at time τ after the reference the laser
+/// Motion during the scan (thesis §2.3.9, docs/algorithms.md §16.10): at time τ after the reference the laser
 /// has moved by δp = v·τ and turned by δφ = ω·τ, so to first order
 ///   ξ = −(n·δp)/cos(α − φ) − d·sin(α − φ)/cos²(α − φ)·δφ,   n = (cos α, sin α).
 double motionPerturbation(double alpha, double d, double bearing, double time, const SensorMotion& motion);

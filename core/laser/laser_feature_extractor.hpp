@@ -1,7 +1,7 @@
 #pragma once
 // LaserScan (+ optional break-hint bearings, + optional laser motion) → FeatureSet of polar
 // lines and right-angle corners in the laser frame, each with the covariance a Kalman filter
-// should use (notes §16.11): random part σ_r²(HᵀH)⁻¹ + C_b plus the systematic bound.
+// should use (docs/algorithms.md §16.11): random part σ_r²(HᵀH)⁻¹ + C_b plus the systematic bound.
 #include <span>
 #include <string>
 #include <vector>

@@ -119,7 +119,7 @@ Mat2 scanBiasCovariance(const PolarLine& line, const PolarReadings& r, double bi
   const double n = static_cast<double>(r.size());
   const double A = (n * sum_cos - sum_cot * sum_sin) / (line.d * (n * sum_cot2 - sum_cot * sum_cot));  // (A.14)
   const double B = sum_sin / n;
-  const double D = line.d * sum_cot / n;  // D′ of notes §16.5
+  const double D = line.d * sum_cot / n;  // D′ of docs/algorithms.md §16.5
   const Vec2 g(A, B - A * D);             // (A.18)–(A.20)
   return bias_sigma * bias_sigma * g * g.transpose();  // (A.21)
 }

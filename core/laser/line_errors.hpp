@@ -2,8 +2,8 @@
 // Random and systematic errors of a polar line fit (thesis §2.3.3–§2.3.10, App. A.3–A.6).
 //
 // Every systematic source is a small range perturbation ξ_i; its effect on (α, d) is one
-// Gauss–Newton step of the polar fit, Δ = (HᵀH)⁻¹Hᵀξ — the general form of (A.29)–(A.30) (notes
-// §16.6). The thesis's closed forms are provided too and tested against simulation; the error
+// Gauss–Newton step of the polar fit, Δ = (HᵀH)⁻¹Hᵀξ — the general form of (A.29)–(A.30)
+// (docs/algorithms.md §16.6). The thesis's closed forms are provided too and tested against simulation; the error
 // budget uses the general form, which is exact to first order for the polar fit at any geometry.
 //
 // "Normalised" bearings are φ − α + π/2 (2.26): the line becomes horizontal, α = π/2, and the
@@ -39,7 +39,7 @@ Vec2 fixedBiasLineError(const PolarLine& line, const PolarReadings& readings, do
 Vec2 fixedBiasLineErrorGeneral(const PolarLine& line, const PolarReadings& readings, double bias);
 
 /// Bias drawn once per scan with std σ_rb: covariance (A.21), C_b = σ_rb²·g·gᵀ with
-/// g = (A, B − A·D′), D′ = (d/n)·Σcot φ_i (notes §16.5: the excerpt's D lacks the factor d).
+/// g = (A, B − A·D′), D′ = (d/n)·Σcot φ_i (docs/algorithms.md §16.5: the excerpt's D lacks the factor d).
 /// Same ±60° validity as (2.33)/(2.35).
 Mat2 scanBiasCovariance(const PolarLine& line, const PolarReadings& readings, double bias_sigma);
 /// The same covariance through the general form: σ_rb²·g·gᵀ with g = (HᵀH)⁻¹Hᵀ1.
@@ -47,7 +47,7 @@ Mat2 scanBiasCovarianceGeneral(const PolarLine& line, const PolarReadings& readi
 
 // ---- Error changing with the incidence angle (§2.3.5, App. A.5) -------------------------------
 
-/// Closed form (A.45)–(A.51) (cleaned in notes §16.7) for range error w·|tan β| on a line at
+/// Closed form (A.45)–(A.51) (cleaned in docs/algorithms.md §16.7) for range error w·|tan β| on a line at
 /// distance d seen over normalised bearings [phi_first, phi_last] ⊂ (0, π). Sums become
 /// integrals, so pass limits extended by half a beam step for the best agreement.
 Vec2 incidenceAngleLineErrorClosedForm(double d, double phi_first, double phi_last, double w);
@@ -59,14 +59,14 @@ Vec2 incidenceAngleLineError(const PolarLine& line, const PolarReadings& reading
 
 // ---- Error growing with distance (§2.3.6, App. A.6) -------------------------------------------
 
-/// Closed form (A.61)–(A.66) (cleaned in notes §16.8) for range error k·(r − r_min); phi_min is
+/// Closed form (A.61)–(A.66) (cleaned in docs/algorithms.md §16.8) for range error k·(r − r_min); phi_min is
 /// the normalised bearing of the shortest reading.
 Vec2 distanceGrowthLineErrorClosedForm(double d, double phi_first, double phi_last, double phi_min, double k);
 Vec2 distanceGrowthLineErrorClosedForm(const PolarLine& line, const PolarReadings& readings, double k);
 /// Numerical form with ξ_i = k·(r_i − r_min), r_i the line's ranges.
 Vec2 distanceGrowthLineError(const PolarLine& line, const PolarReadings& readings, double k);
 
-// ---- Quantisation bias (§2.3.7, reconstructed in notes §16.10) --------------------------------
+// ---- Quantisation bias (§2.3.7, reconstructed in docs/algorithms.md §16.10) --------------------------------
 
 /// Error from ξ_i = b·sin(2π(r_i − Q(r_i))/q_r) (2.6) with r_i the line's ranges.
 Vec2 quantizationLineError(const PolarLine& line, const PolarReadings& readings, double quantum, double amplitude);
@@ -83,14 +83,14 @@ Vec2 planeTiltLineError(const PolarLine& line, const PolarReadings& readings, do
 /// In-plane mounting yaw δ: the whole line turns, Δα = δ, Δd = 0.
 inline Vec2 yawMisalignmentLineError(double yaw) { return {yaw, 0.0}; }
 
-// ---- Motion during the scan (§2.3.9, reconstructed in notes §16.10) ---------------------------
+// ---- Motion during the scan (§2.3.9, reconstructed in docs/algorithms.md §16.10) ---------------------------
 
 /// Laser moving with `motion` (laser frame, at the reference time); reading i is taken
 /// times[i] seconds after the reference time.
 Vec2 motionLineError(const PolarLine& line, const PolarReadings& readings, std::span<const double> times,
                      const SensorMotion& motion);
 
-// ---- Summary (§2.3.10, notes §16.10–§16.11) ----------------------------------------------------
+// ---- Summary (§2.3.10, docs/algorithms.md §16.10–§16.11) ----------------------------------------------------
 
 struct LineErrorBudget {
   Mat2 noise_cov = Mat2::Zero();      ///< σ_r²(HᵀH)⁻¹   (2.25)
@@ -107,7 +107,7 @@ struct LineErrorBudget {
 
   /// Random part: σ_r²(HᵀH)⁻¹ + C_b.
   Mat2 randomCov() const { return noise_cov + scan_bias_cov; }
-  /// Covariance a Kalman filter should use (notes §16.11): the random part plus the systematic
+  /// Covariance a Kalman filter should use (docs/algorithms.md §16.11): the random part plus the systematic
   /// bound taken as a standard deviation (scaled), R = σ_r²(HᵀH)⁻¹ + C_b + diag((scale·bound)²).
   Mat2 filterCov(double scale = 1.0) const;
 };

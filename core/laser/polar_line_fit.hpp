@@ -58,7 +58,7 @@ PolarLine fitLineTotalLeastSquares(const PolarReadings& readings);
 struct LineFitOptions {
   int max_iterations = 20;
   double angle_tolerance = 1e-6;      ///< rad: stop when |Δα| and |Δd| are both below tolerance
-  double distance_tolerance = 1e-6;   ///< m (notes §16.3; the step taken then leaves ~1e-12)
+  double distance_tolerance = 1e-6;   ///< m (docs/algorithms.md §16.3; the step taken then leaves ~1e-12)
   double max_incidence = 1.4;         ///< rad: fail if a beam meets the line at a larger |α − φ|
 };
 

@@ -1,5 +1,5 @@
 #pragma once
-// Odometry error model of notes §17.6 (thesis §3.4; reconstruction after [KODO, CK97]):
+// Odometry error model of docs/algorithms.md §17.6 (thesis §3.4; reconstruction after [KODO, CK97]):
 // zero-mean white wheel-distance errors with per-wheel variance proportional to the distance the
 // wheel rolled, σ_R² = k_R·|Δs_R|, σ_L² = k_L·|Δs_L|, propagated through the differential-drive
 // midpoint model
@@ -65,11 +65,11 @@ struct MotionJacobians {
 
 /// The midpoint model's step for wheel travels (Δs_R, Δs_L).
 Pose2 differentialDriveStep(const Pose2& pose, double ds_right, double ds_left, double wheelbase);
-/// F_x and F_u of notes §17.6 at `pose` for wheel travels (Δs_R, Δs_L).
+/// F_x and F_u of docs/algorithms.md §17.6 at `pose` for wheel travels (Δs_R, Δs_L).
 MotionJacobians differentialDriveJacobians(const Pose2& pose, double ds_right, double ds_left, double wheelbase);
 /// diag(k_R|Δs_R|, k_L|Δs_L|).
 Mat2 wheelTravelCovariance(double ds_right, double ds_left, const WheelErrorParams& params);
-/// One step of notes §17.6: moves `pose` and propagates `covariance` in place (no sub-steps).
+/// One step of docs/algorithms.md §17.6: moves `pose` and propagates `covariance` in place (no sub-steps).
 void propagateWheelStep(Pose2& pose, Mat3& covariance, double ds_right, double ds_left, const WheelErrorParams& params);
 
 /// The midpoint model's step for a forward distance and heading change.

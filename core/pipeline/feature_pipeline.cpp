@@ -78,7 +78,7 @@ FeaturePipelineConfig configForRobot(const RobotDescription& robot, SlamSensors 
   c.fusion.use_sonar = sensors != SlamSensors::Laser;
   c.sonar_break_hints = sensors == SlamSensors::Fused;
   c.fusion.laser_aided_selection = sensors == SlamSensors::Fused;
-  // The odometry model with the robot's own wheel base and wheel-error constants (notes §17.6);
+  // The odometry model with the robot's own wheel base and wheel-error constants (docs/algorithms.md §17.6);
   // the systematic radius and wheel-base errors are unknown to the robot, as to the odometry.
   c.slam.odometry.wheels.wheelbase = robot.robot.wheel_base;
   c.slam.odometry.wheels.k_left = robot.odometry.k_left;

@@ -30,7 +30,7 @@ struct DriveConfig {
   PathFollowerConfig follower;
 };
 
-/// Per-wheel random error with variance growing with distance (notes §17.6) and optional
+/// Per-wheel random error with variance growing with distance (docs/algorithms.md §17.6) and optional
 /// systematic errors, which the odometry does not know about (its covariance ignores them).
 struct OdometryConfig {
   double rate = 50.0;                 ///< Hz

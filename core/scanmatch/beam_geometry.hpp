@@ -1,5 +1,5 @@
 #pragma once
-// The bearing grid of a scan (notes §3.3): φ_i = angle_min + i·Δφ with Δφ > 0, taken from the
+// The bearing grid of a scan (docs/algorithms.md §3.3): φ_i = angle_min + i·Δφ with Δφ > 0, taken from the
 // sensor, with its cos/sin tables computed once per geometry and shared by every scan of it.
 #include <cmath>
 #include <cstddef>

@@ -1,5 +1,5 @@
 #pragma once
-// Laser odometry by scan matching against a keyframe (notes, appendix "how the original PSM
+// Laser odometry by scan matching against a keyframe (docs/algorithms.md, appendix "how the original PSM
 // behaves on real logs"): each scan is matched to the last keyframe with the wheel-odometry
 // motion as the prior; a new keyframe is taken after enough motion. Matching against a keyframe
 // instead of the previous scan stops per-match jitter from accumulating, and when odometry and

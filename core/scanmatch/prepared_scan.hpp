@@ -1,5 +1,5 @@
 #pragma once
-// A scan preprocessed once for matching (notes §4): bearings made increasing, optional
+// A scan preprocessed once for matching (docs/algorithms.md §4): bearings made increasing, optional
 // decimation, median filter on a copy of the ranges, far-point flags, segmentation, Cartesian
 // points, and the masked arrays the orientation search reads. Matching never allocates per
 // scan pair: everything that depends on one scan alone is here.

@@ -1,5 +1,5 @@
 #pragma once
-// Scan projection (algorithm notes §6, thesis fig. 4.9): the current scan, seen from its pose in
+// Scan projection (docs/algorithms.md §6, thesis fig. 4.9): the current scan, seen from its pose in
 // the reference laser frame, resampled at the reference bearings with z-buffering, so that
 // readings associate by bearing. Between two readings of one segment the surface is the straight
 // line through them and each reference ray is intersected with it (the original interpolates

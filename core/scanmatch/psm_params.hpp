@@ -1,5 +1,5 @@
 #pragma once
-// Parameters of PSM, PSM-C and the ICP baseline in SI units (algorithm notes §13, converted from
+// Parameters of PSM, PSM-C and the ICP baseline in SI units (docs/algorithms.md §13, converted from
 // the original centimetre constants). Defaults are the thesis-era SICK LMS values unless a
 // comment says why polarslam departs from them.
 #include <string>
@@ -89,7 +89,7 @@ struct PsmParams {
   /// Once the alternating steps are smaller than these, finish with joint (x, y, θ) Gauss–Newton
   /// steps on the same polar residuals with the surface-consistent Jacobian of §11.1 — a
   /// point-to-line refinement that converges in one or two projections instead of a tail of
-  /// ever smaller alternating steps (notes, appendix). false = the original alternation only.
+  /// ever smaller alternating steps (docs/algorithms.md, appendix). false = the original alternation only.
   bool joint_refinement = true;
   double joint_switch_translation = 0.05;
   double joint_switch_rotation = deg2rad(2.0);

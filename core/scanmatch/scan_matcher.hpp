@@ -1,5 +1,5 @@
 #pragma once
-// Polar Scan Matching (Diosi & Kleeman; algorithm notes §3–§11), its Cartesian variant PSM-C
+// Polar Scan Matching (Diosi & Kleeman; docs/algorithms.md §3–§11), its Cartesian variant PSM-C
 // (§10) and the simple point-to-point ICP the thesis compared against (§12), natively in the
 // polarslam frame (x forward, SI). A ScanMatcher owns reusable work buffers: one instance per
 // thread, no allocation per match once the buffers have grown to the scan size.

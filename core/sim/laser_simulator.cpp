@@ -19,7 +19,7 @@ LaserSimulator::LaserSimulator(const LaserConfig& config, uint64_t seed) : confi
 
 double LaserSimulator::tiltedRange(double horizontal_range, double bearing) const {
   if (config_.tilt == 0.0) return horizontal_range;
-  const double elevation = config_.tilt * std::sin(bearing - config_.tilt_axis);  // notes §16.10
+  const double elevation = config_.tilt * std::sin(bearing - config_.tilt_axis);  // docs/algorithms.md §16.10
   return horizontal_range / std::cos(elevation);
 }
 

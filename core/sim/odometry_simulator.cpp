@@ -23,7 +23,7 @@ OdometryReading OdometrySimulator::measure(int64_t utime, const WheelTravel& tru
                                       std::sqrt(config_.k_right * std::abs(true_right)));
   measured_.left += ds_left;
   measured_.right += ds_right;
-  propagateWheelStep(pose_, cov_, ds_right, ds_left, model_);  // notes §17.6
+  propagateWheelStep(pose_, cov_, ds_right, ds_left, model_);  // docs/algorithms.md §17.6
 
   OdometryReading r;
   r.utime = utime;

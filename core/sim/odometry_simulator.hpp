@@ -1,7 +1,7 @@
 #pragma once
 // Simulated wheel odometry: the true wheel travel, scaled by the (unknown to the robot) wheel
 // radius errors, plus zero-mean white noise whose variance grows with the distance each wheel
-// rolls (σ² = k·|Δs|, notes §17.6). The pose is integrated with the wheel base the robot
+// rolls (σ² = k·|Δs|, docs/algorithms.md §17.6). The pose is integrated with the wheel base the robot
 // believes in, and its covariance propagated with the same per-wheel variance model.
 #include <cstdint>
 

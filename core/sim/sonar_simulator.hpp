@@ -1,5 +1,5 @@
 #pragma once
-// Simulated advanced sonar array (notes §17.2–17.3): targets classified plane / corner / edge
+// Simulated advanced sonar array (docs/algorithms.md §17.2–17.3): targets classified plane / corner / edge
 // with range and bearing errors of about 1 mm and 0.1°.
 //  - plane: specular, so the echo returns along the wall's normal: seen only when the foot of
 //    the perpendicular from the array lies on the wall and within the field of view; range =

@@ -1,6 +1,6 @@
 #pragma once
 // Data association for EKF SLAM (thesis §3.6.1; the thesis's gates and strategy are not
-// recovered, notes §17.7). Design:
+// recovered, docs/algorithms.md §17.7). Design:
 //  1. individual compatibility: each observation is linearised against every map feature of its
 //     kind that the caller deems compatible (side of a line, convexity of a corner, line extent);
 //     pairs whose Mahalanobis distance passes the χ² gate are its candidates, nearest first;

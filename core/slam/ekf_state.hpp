@@ -55,7 +55,7 @@ class EkfState {
   Mat3 robotFeatureCovariance(int feature) const;
 
   /// Prediction with an odometry motion: x_v ← x_v ⊕ Δ, robot rows and columns of P propagated
-  /// with J_a = ∂(x_v ⊕ Δ)/∂x_v (the F_x of notes §17.6) and Q = J_b·Σ_Δ·J_bᵀ.
+  /// with J_a = ∂(x_v ⊕ Δ)/∂x_v (the F_x of docs/algorithms.md §17.6) and Q = J_b·Σ_Δ·J_bᵀ.
   void predict(const OdometryMotion& motion);
 
   /// Innovation covariance H·P·Hᵀ + R of one linearised observation (dim × dim, padded).

@@ -1,7 +1,7 @@
 #pragma once
 // The SLAM feature map and scan anchors as plain structs: the EKF produces them, the grid
 // (pose regeneration) and the report consume them. Conventions follow thesis App. B
-// (notes §17.8): lines (α, d), corners (x, y, γ), points (x, y) in the map frame; observations
+// (docs/algorithms.md §17.8): lines (α, d), corners (x, y, γ), points (x, y) in the map frame; observations
 // in the robot base frame: line (α_r, d_r), corner (φ_r, r_r, γ_r), point (x_r, y_r).
 #include <cstdint>
 #include <vector>

@@ -34,7 +34,7 @@ LineInitModel initLine(const Pose2& robot, const Vec2& observed_line) {
     m.y = {wrapAngle(alpha_prime + std::numbers::pi), -d_prime};
     m.s = -1.0;
   }
-  // Evaluated at the stored α_m: no s on the trigonometric entries (notes §17.8).
+  // Evaluated at the stored α_m: no s on the trigonometric entries (docs/algorithms.md §17.8).
   const double c = std::cos(m.y.x()), s = std::sin(m.y.x());
   const double lever = -robot.x * s + robot.y * c;
   m.G_z << 1.0, 0.0,
@@ -77,7 +77,7 @@ CornerObservationModel observeCorner(const Pose2& robot, const Vec3& map_corner)
   CornerObservationModel m;
   m.z = {std::atan2(yr, xr), root, wrapAngle(map_corner.z() - robot.theta)};
   if (!(root > 0.0)) return m;
-  // With (x − x_m, y − y_m) = (−dx, −dy), App. B's H_x and H_y (notes §17.8, erratum 5 applied).
+  // With (x − x_m, y − y_m) = (−dx, −dy), App. B's H_x and H_y (docs/algorithms.md §17.8, erratum 5 applied).
   m.H_x << dy / t, -dx / t, -1.0,
            -dx / root, -dy / root, 0.0,
            0.0, 0.0, -1.0;

@@ -1,5 +1,5 @@
 #pragma once
-// EKF SLAM feature models of thesis App. B, as corrected in notes §17.8: for lines (α, d),
+// EKF SLAM feature models of thesis App. B, as corrected in docs/algorithms.md §17.8: for lines (α, d),
 // right-angle corners (x, y, γ) and points (x, y) in the map frame,
 //   h: map → robot (the observation) with H_x = ∂h/∂x_v, H_y = ∂h/∂y_i,
 //   g: robot → map (feature initialisation) with G_x = ∂g/∂x_v, G_z = ∂g/∂z.
@@ -16,7 +16,7 @@ using Mat23 = Eigen::Matrix<double, 2, 3>;
 
 // ---- Lines -------------------------------------------------------------------------------------
 //
-// Flip convention (notes §17.8): a line is stored with d ≥ 0. When the robot-frame distance of a
+// Flip convention (docs/algorithms.md §17.8): a line is stored with d ≥ 0. When the robot-frame distance of a
 // map line comes out negative, the observation flips (d → −d, α → α + π) and s = −1 multiplies
 // the d row of H_x and H_y, which are evaluated at the *state's* α_m. In G_x and G_z, evaluated
 // at the *stored* (possibly flipped) α_m, the trigonometric entries carry no s.

@@ -2,9 +2,9 @@
 // Feature-based EKF SLAM (thesis §3.5–§3.6) over an odometry stream and a stream of feature sets
 // in the robot base frame (FEATURES: laser, sonar or fused lines, right-angle corners, points).
 //
-//  - prediction: the odometry error model of notes §17.6 (odometry/odometry_model.hpp);
+//  - prediction: the odometry error model of docs/algorithms.md §17.6 (odometry/odometry_model.hpp);
 //    odometry readings are cut at each feature set's time stamp by interpolation;
-//  - observation models and Jacobians: App. B as corrected in notes §17.8 (slam/feature_models);
+//  - observation models and Jacobians: App. B as corrected in docs/algorithms.md §17.8 (slam/feature_models);
 //  - association: gate + JCBB + ambiguity rejection (slam/association.hpp), after per-kind
 //    compatibility: a line is only matched from the side it was first seen from (the two faces
 //    of a thin wall are different surfaces) and within `max_line_extent_gap` of its observed
@@ -17,7 +17,7 @@
 //    last) it enters the state, initialised from the latest observation through g() with
 //    P_yy = G_x·P_vv·G_xᵀ + G_z·R·G_zᵀ. Spurious returns never reach the filter;
 //  - line endpoints: kept outside the filter as an extent [t_min, t_max] along each map line
-//    (notes §17.9), grown by projecting every matched segment onto it;
+//    (docs/algorithms.md §17.9), grown by projecting every matched segment onto it;
 //  - scan anchors: for each requested laser scan time, the map features near the robot seen from
 //    the posterior pose at that time, with the covariance H·P·Hᵀ of that relative view (§3.7.2).
 //

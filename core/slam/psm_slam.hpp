@@ -1,5 +1,5 @@
 #pragma once
-// SLAM with Polar Scan Matching (thesis §4.5, notes §18), plus global pose-graph optimisation.
+// SLAM with Polar Scan Matching (thesis §4.5, docs/algorithms.md §18), plus global pose-graph optimisation.
 //
 //   PsmSlam slam(params);
 //   slam.addOdometry(reading);            // any number, in time order

@@ -1,5 +1,5 @@
 #pragma once
-// The Kalman filter of PSM SLAM (notes §18): a delayed-state EKF whose state is the current robot
+// The Kalman filter of PSM SLAM (docs/algorithms.md §18): a delayed-state EKF whose state is the current robot
 // pose plus the poses of the stored reference scans (keyframes). Prediction composes the odometry
 // motion (§17.6 model); an observation is a scan match: the robot pose relative to one keyframe,
 // with the match covariance.

@@ -19,7 +19,7 @@ FeatureSet transformFeatures(const FeatureSet& set, const Pose2& T, const Mat3& 
 /// The set in the robot base frame (through its sensor_pose); already-"base" sets are returned as is.
 FeatureSet toBaseFrame(const FeatureSet& set);
 
-/// True when a corner's orientation variance says "unknown" (sonar corners, notes §17.3).
+/// True when a corner's orientation variance says "unknown" (sonar corners, docs/algorithms.md §17.3).
 inline bool cornerOrientationUnknown(const Mat3& cov) { return !(cov(2, 2) < 0.1 * kUnknownAngleVariance); }
 
 }  // namespace polarslam

@@ -1,5 +1,5 @@
 #pragma once
-// Laser and advanced-sonar fusion (thesis §3.3; notes §17.1, §17.4, §17.5).
+// Laser and advanced-sonar fusion (thesis §3.3; docs/algorithms.md §17.1, §17.4, §17.5).
 //
 // Fusion rule (§3.3.2, sourced in words): laser and sonar measurements of the same line or
 // right-angle corner, in the robot base frame at one time stamp, are averaged with their

@@ -1,5 +1,5 @@
 #pragma once
-// Advanced-sonar targets as features in the robot base frame (notes §17.3; reconstruction):
+// Advanced-sonar targets as features in the robot base frame (docs/algorithms.md §17.3; reconstruction):
 //  - plane → line: the echo returns along the plane's normal, so in the array frame the line is
 //    (α, d) = (ψ, ρ) for bearing ψ and range ρ;
 //  - corner → right-angle corner: the double reflection comes from the apex; the sonar does not

@@ -1,6 +1,6 @@
 #pragma once
 // Laser-aided selection of sonar measurements and sonar-aided laser segmentation (thesis
-// §3.3.1; not recovered, designed here after the principle of notes §17.1 items 1–2 and §17.4).
+// §3.3.1; not recovered, designed here after the principle of docs/algorithms.md §17.1 items 1–2 and §17.4).
 //
 // Each sonar reflection point (an edge's point, a corner's apex, a plane's normal foot) is
 // looked up in a laser scan taken at (or motion-compensated to) the same time:

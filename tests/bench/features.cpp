@@ -1,5 +1,5 @@
 // bench_features: the laser line and corner error model checked and timed (thesis chapter 2,
-// notes §19.1). Run by scripts/bench-features.
+// docs/algorithms.md §19.1). Run by scripts/bench-features.
 //  1. Monte Carlo: empirical std of the fitted (α, d) over noisy scans / predicted σ_r²(HᵀH)⁻¹.
 //  2. Each systematic-error formula / the simulated error of its source alone.
 //  3. Per-scan bias covariance (A.21) and the corner covariance / Monte Carlo.
@@ -360,7 +360,7 @@ std::vector<LaserScan> readFlaser(const std::string& path, int max_scans) {
     int n = 0;
     if (!(s >> n) || n < 2 || n > 2000) continue;
     LaserScan scan;
-    // FOV by beam count (notes §20.3): 180 → 1° from −90°, 181 → −90..90, 360/361 → 0.5°.
+    // FOV by beam count (docs/algorithms.md §20.3): 180 → 1° from −90°, 181 → −90..90, 360/361 → 0.5°.
     scan.angle_increment = deg2rad(n >= 360 ? 0.5 : 1.0);
     scan.angle_min = -std::numbers::pi / 2;
     scan.range_max = 80.0;  // 81.83 / 81.91 = no return

@@ -1,4 +1,4 @@
-// bench_grid: occupancy-grid consistency after loop closure (thesis §3.7.2, notes §19.3).
+// bench_grid: occupancy-grid consistency after loop closure (thesis §3.7.2, docs/algorithms.md §19.3).
 // The simulated robot drives the default office path, which closes a loop; fused EKF SLAM runs
 // over it and anchors every laser scan to the map features around it. After the run (the map
 // has shifted at loop closure) three grids are built from the same anchored scans:

@@ -99,7 +99,7 @@ nlohmann::json statsJson(const ErrorStatistics& s) {
   return {{"mean", s.mean}, {"std", s.std}, {"min", s.min}, {"max", s.max}, {"count", s.count}};
 }
 
-/// Relations whose two poses are less than 30 s apart (the "local" accuracy of the notes' appendix).
+/// Relations whose two poses are less than 30 s apart (the "local" accuracy of docs/algorithms.md's appendix).
 std::vector<Relation> localRelations(const std::vector<Relation>& relations) {
   std::vector<Relation> local;
   for (const auto& r : relations)

@@ -1,4 +1,4 @@
-// bench_scanmatch: the thesis's chapter 4 experiments (notes §19.4), PSM, PSM-C and ICP side by
+// bench_scanmatch: the thesis's chapter 4 experiments (docs/algorithms.md §19.4), PSM, PSM-C and ICP side by
 // side, against the goals of issue 4:
 //   1. the v0.3 simulated room (§15.1);
 //   2. accuracy on noisy simulated pairs against ground truth;
@@ -408,7 +408,7 @@ void mitExperiments(const Options& o) {
 
   std::printf("   a) laser odometry against keyframes (wheel odometry as prior), relation metric over relations "
               "< 30 s apart\n");
-  std::printf("      reference (notes appendix, original PSM v0.3 chained: 0.056 m; CSM PLICP chained: 0.030 m); "
+  std::printf("      reference (docs/algorithms.md appendix, original PSM v0.3 chained: 0.056 m; CSM PLICP chained: 0.030 m); "
               "wheel odometry below\n");
   std::printf("      %-16s %10s %10s %10s %9s %10s %10s\n", "method", "trans m", "std m", "rot deg", "failed", "us/scan",
               "us/match");

@@ -1,4 +1,4 @@
-// bench_slam: EKF feature SLAM with laser only, sonar only and fused (thesis §3.8, notes §19.2).
+// bench_slam: EKF feature SLAM with laser only, sonar only and fused (thesis §3.8, docs/algorithms.md §19.2).
 //  1. The thesis's claim: in a world with glass walls, sound-absorbing partitions and a long
 //     corridor with only small features, each seed's simulated run is fed to the three
 //     configurations at once (same sensor data); ATE, maximum error, map size and whether the run

@@ -1,4 +1,4 @@
-// CARMEN log parsing (notes §20.2–§20.3, data README).
+// CARMEN log parsing (docs/algorithms.md §20.2–§20.3, data README).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,5 +1,5 @@
-// Right-angle corner fit in polar coordinates (thesis §2.4, notes §16.10) and its covariance of
-// apex and orientation γ (notes §17.8), checked against Monte Carlo estimates.
+// Right-angle corner fit in polar coordinates (thesis §2.4, docs/algorithms.md §16.10) and its covariance of
+// apex and orientation γ (docs/algorithms.md §17.8), checked against Monte Carlo estimates.
 #include <gtest/gtest.h>
 
 #include <cmath>

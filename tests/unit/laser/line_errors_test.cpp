@@ -130,7 +130,7 @@ TEST(LineErrors, PerScanBiasCovarianceMatchesMonteCarlo) {
 }
 
 TEST(LineErrors, ExcerptsScanBiasFormWithoutDistanceFactorIsWrong) {
-  // notes §16.5: D = (1/n)Σcot φ (excerpt) instead of D′ = (d/n)Σcot φ. At d = 4 m the two
+  // docs/algorithms.md §16.5: D = (1/n)Σcot φ (excerpt) instead of D′ = (d/n)Σcot φ. At d = 4 m the two
   // differ; the corrected one matches the general form.
   const LineCase c{45, 4.0, 30, 30, 0.5};
   const std::vector<double> b = c.bearings();
@@ -367,7 +367,7 @@ TEST(LineErrors, BudgetSumsAbsoluteValuesAndBoundsAllSourcesTogether) {
     EXPECT_NEAR(filter(0, 0), budget.randomCov()(0, 0) + std::pow(budget.systematic_bound.x(), 2), 1e-15);
     EXPECT_NEAR(filter(0, 1), budget.randomCov()(0, 1), 1e-15);
 
-    // Superposition (notes §19.1): all systematic sources at once stay within the bound.
+    // Superposition (docs/algorithms.md §19.1): all systematic sources at once stay within the bound.
     std::vector<double> ranges(b.size());
     const double r_min = *std::min_element(exact.begin(), exact.end());
     for (size_t i = 0; i < b.size(); ++i) {

@@ -1,4 +1,4 @@
-// PSM preprocessing (notes §4): median filter, far points, segmentation, bearing order,
+// PSM preprocessing (docs/algorithms.md §4): median filter, far points, segmentation, bearing order,
 // decimation, the fast atan2 and corridor detection.
 #include <gtest/gtest.h>
 

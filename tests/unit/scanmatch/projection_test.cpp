@@ -1,4 +1,4 @@
-// Scan projection (notes §6) and the frame conversions of §1.3 and §5.
+// Scan projection (docs/algorithms.md §6) and the frame conversions of §1.3 and §5.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,5 +1,5 @@
 // PSM, PSM-C and ICP against ray-cast ground truth: the v0.3 unit-test room and corridor
-// (notes §15.1), accuracy on noisy pairs, the basin of convergence and covariance honesty.
+// (docs/algorithms.md §15.1), accuracy on noisy pairs, the basin of convergence and covariance honesty.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>

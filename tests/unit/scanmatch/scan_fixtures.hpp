@@ -1,6 +1,6 @@
 #pragma once
 // Scans for the scan-matching tests and benchmark, ray-cast in sim::World geometry: the v0.3
-// test room and corridor (notes §15.1), the project's room.yaml and a cluttered office.
+// test room and corridor (docs/algorithms.md §15.1), the project's room.yaml and a cluttered office.
 // Noise is drawn from our own Box–Muller over mt19937_64, so a seed gives the same scans with
 // any standard library.
 #include <Eigen/Dense>

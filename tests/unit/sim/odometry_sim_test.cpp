@@ -1,5 +1,5 @@
-// Simulated odometry: Monte Carlo error statistics against the propagated covariance (notes
-// §17.6), systematic errors, and consistency with the simulated robot's true motion.
+// Simulated odometry: Monte Carlo error statistics against the propagated covariance
+// (docs/algorithms.md §17.6), systematic errors, and consistency with the simulated robot's true motion.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>

@@ -1,4 +1,4 @@
-// App. B models (notes §17.8): every Jacobian against central differences of its own function,
+// App. B models (docs/algorithms.md §17.8): every Jacobian against central differences of its own function,
 // including both sides of the line flip; h and g inverse to each other.
 #include <gtest/gtest.h>
 
@@ -137,7 +137,7 @@ TEST_F(FeatureModels, CornerJacobiansMatchNumeric) {
 }
 
 TEST_F(FeatureModels, CornerObservationSecondRowIsTheNegatedErratum) {
-  // Erratum 5 of notes §17.8: ∂r_r/∂y_m is minus ∂r_r/∂x_v's position part.
+  // Erratum 5 of docs/algorithms.md §17.8: ∂r_r/∂y_m is minus ∂r_r/∂x_v's position part.
   const CornerObservationModel h = observeCorner({1.0, 2.0, 0.3}, {4.0, 6.0, 1.0});
   EXPECT_NEAR(h.z.y(), 5.0, 1e-12);
   EXPECT_NEAR(h.H_y(1, 0), 3.0 / 5.0, 1e-12);

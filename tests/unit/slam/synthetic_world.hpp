@@ -1,7 +1,7 @@
 #pragma once
 // A small synthetic world with known truth for EKF tests: a rectangular room (4 walls, 4 concave
 // corners with known orientation) and a few point reflectors; a robot driving a circle with
-// wheel odometry whose errors follow exactly the model the filter assumes (notes §17.6); and
+// wheel odometry whose errors follow exactly the model the filter assumes (docs/algorithms.md §17.6); and
 // observations drawn from exactly the covariances they report. Whatever is wrong in a filter run
 // on this world is the filter's fault.
 #include <cmath>
