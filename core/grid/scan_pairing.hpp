@@ -38,8 +38,6 @@ class ScanPairing {
   }
 
   int64_t unpairedDropped() const { return dropped_; }
-  size_t pendingScans() const { return scans_.size(); }
-  size_t pendingTags() const { return tags_.size(); }
   const std::map<int64_t, LaserScan>& scans() const { return scans_; }
   const std::map<int64_t, Tag>& tags() const { return tags_; }
 

@@ -84,7 +84,6 @@ class LaserFeatureExtractor {
                      const SensorMotion& motion = {}, ExtractionDetails* details = nullptr) const;
 
   const LaserFeatureConfig& config() const { return config_; }
-  const LaserErrorModel& errorModel() const { return model_; }
 
   /// A-posteriori variance factor of a fit with n readings and p parameters: SSE/((n − p)·σ_r²)
   /// when SSE/σ_r² fails the χ²(n − p) test at config().residual_gate, otherwise 1.

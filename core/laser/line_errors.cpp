@@ -85,18 +85,31 @@ Vec2 lineErrorFromRangeErrors(const PolarLine& line, const PolarReadings& r, std
                             [&](size_t i, const Incidence&, double) { return xi[i]; });
 }
 
-Vec2 fixedBiasLineError(const PolarLine& line, const PolarReadings& r, double bias) {
-  // Sums over the normalised bearings (2.26) of (2.33) and (2.35).
-  double sum_cos = 0.0, sum_sin = 0.0, sum_cot = 0.0, sum_cot2 = 0.0;
+namespace {
+
+/// Sums over the normalised bearings (2.26) that (2.33), (2.35) and (A.14) are built from.
+struct NormalizedBearingSums {
+  double n = 0.0, sum_cos = 0.0, sum_sin = 0.0, sum_cot = 0.0, sum_cot2 = 0.0;
+};
+
+NormalizedBearingSums normalizedBearingSums(const PolarLine& line, const PolarReadings& r) {
+  NormalizedBearingSums s;
+  s.n = static_cast<double>(r.size());
   for (size_t i = 0; i < r.size(); ++i) {
     const double phi = normalizedBearing(line, r.bearing[i]);
-    const double c = std::cos(phi), s = std::sin(phi), cot = c / s;
-    sum_cos += c;
-    sum_sin += s;
-    sum_cot += cot;
-    sum_cot2 += cot * cot;
+    const double c = std::cos(phi), cot = c / std::sin(phi);
+    s.sum_cos += c;
+    s.sum_sin += std::sin(phi);
+    s.sum_cot += cot;
+    s.sum_cot2 += cot * cot;
   }
-  const double n = static_cast<double>(r.size());
+  return s;
+}
+
+}  // namespace
+
+Vec2 fixedBiasLineError(const PolarLine& line, const PolarReadings& r, double bias) {
+  const auto [n, sum_cos, sum_sin, sum_cot, sum_cot2] = normalizedBearingSums(line, r);
   const double slope_error = bias / line.d * (n * sum_cos - sum_cot * sum_sin) / (n * sum_cot2 - sum_cot * sum_cot);  // (2.33)
   const double intercept_error = bias / n * sum_sin - slope_error / n * (bias * sum_cos + line.d * sum_cot);  // (2.35)
   return {slope_error, intercept_error};  // α_e ≈ k_e, d_e ≈ q_e for the normalised line
@@ -107,16 +120,7 @@ Vec2 fixedBiasLineErrorGeneral(const PolarLine& line, const PolarReadings& r, do
 }
 
 Mat2 scanBiasCovariance(const PolarLine& line, const PolarReadings& r, double bias_sigma) {
-  double sum_cos = 0.0, sum_sin = 0.0, sum_cot = 0.0, sum_cot2 = 0.0;
-  for (size_t i = 0; i < r.size(); ++i) {
-    const double phi = normalizedBearing(line, r.bearing[i]);
-    const double c = std::cos(phi), s = std::sin(phi), cot = c / s;
-    sum_cos += c;
-    sum_sin += s;
-    sum_cot += cot;
-    sum_cot2 += cot * cot;
-  }
-  const double n = static_cast<double>(r.size());
+  const auto [n, sum_cos, sum_sin, sum_cot, sum_cot2] = normalizedBearingSums(line, r);
   const double A = (n * sum_cos - sum_cot * sum_sin) / (line.d * (n * sum_cot2 - sum_cot * sum_cot));  // (A.14)
   const double B = sum_sin / n;
   const double D = line.d * sum_cot / n;  // D′ of docs/algorithms.md §16.5

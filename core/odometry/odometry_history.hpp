@@ -36,7 +36,6 @@ class OdometryHistory {
   std::optional<RelativeMotion> motion(int64_t from, int64_t to) const;
 
   bool empty() const { return readings_.empty(); }
-  int64_t latestUtime() const { return readings_.empty() ? 0 : readings_.back().utime; }
   const OdometryModelParams& model() const { return model_; }
 
  private:

@@ -51,8 +51,6 @@ class FeatureSlamEstimator : public Estimator {
   const FeatureSlam& slam() const { return slam_; }
   const FeatureFusion& fusion() const { return fusion_; }
   const std::vector<ScanAnchors>& anchors() const { return anchors_; }
-  /// Laser scans paired with their anchors, for the occupancy grid (bounded, see core/grid).
-  const AnchoredScanStore& gridScans() const { return grid_scans_; }
   const FeaturePipelineConfig& config() const { return config_; }
   /// Ids of map features first matched again after `revisit_after_s` seconds away from them
   /// (a loop closure), in the order they happened.

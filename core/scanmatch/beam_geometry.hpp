@@ -17,7 +17,6 @@ struct BeamGeometry {
   std::vector<float> cos_float, sin_float;  ///< the same in single precision (projection)
 
   double bearing(size_t i) const { return angle_min + static_cast<double>(i) * angle_increment; }
-  double angleMax() const { return bearing(size - 1); }
   double fieldOfView() const { return angle_increment * static_cast<double>(size - 1); }
   /// Bearing in the middle of the field of view; projected bearings are unwrapped around it.
   double centre() const { return angle_min + 0.5 * fieldOfView(); }

@@ -60,7 +60,6 @@ class LaserOdometry {
 
   const std::vector<PoseStamped>& trajectory() const { return trajectory_; }
   const LaserOdometryParams& params() const { return params_; }
-  const PsmParams& psmParams() const { return matcher_.params(); }
   int64_t scans() const { return scans_; }
   int64_t failedMatches() const { return failed_; }
   int64_t keyframes() const { return keyframes_; }

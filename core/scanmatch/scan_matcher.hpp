@@ -56,7 +56,6 @@ class ScanMatcher {
   void estimateCovariance(const PreparedScan& ref, const PreparedScan& cur, MatchResult& result);
   Mat3 heuristicCovariance(const PreparedScan& ref, double error_index) const;
 
-  const Projection& lastProjection() const { return projection_; }
 
  private:
   struct TranslationStep {

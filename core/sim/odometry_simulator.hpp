@@ -22,8 +22,6 @@ class OdometrySimulator {
   /// the robot's pose at the first reading.
   OdometryReading measure(int64_t utime, const WheelTravel& true_travel, double dt);
 
-  /// The model the covariance is propagated with (wheel base as the robot believes it).
-  const WheelErrorParams& errorModel() const { return model_; }
 
  private:
   OdometryConfig config_;

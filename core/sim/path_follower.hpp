@@ -29,8 +29,6 @@ class PathFollower {
   VelocityCommand update(const Pose2& pose, const VelocityCommand& current, double dt);
 
   bool finished() const { return finished_; }
-  /// Number of path segments completed so far (counts on around a looping path).
-  size_t segmentsCompleted() const { return completed_; }
   /// The point the robot is currently steering towards.
   Vec2 target() const { return target_; }
 

@@ -34,7 +34,6 @@ class Trajectory {
   double speedAt(double t) const;
   double turnRateAt(double t) const;
   Pose2 endPose() const { return end_pose_; }
-  WheelTravel endWheelTravel() const { return end_travel_; }
 
   /// Drops periods that end before t (bounded memory on long runs).
   void forgetBefore(double t);

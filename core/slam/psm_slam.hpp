@@ -100,7 +100,6 @@ class PsmSlam {
   /// Whether anything has been received yet (the map frame is set by the first message).
   bool started() const { return started_; }
   Pose2 currentPose() const { return filter_.robotPose(); }
-  Mat3 currentCovariance() const { return filter_.robotCovariance(); }
   const PsmSlamFilter& filter() const { return filter_; }
 
  private:

@@ -253,14 +253,6 @@ void PsmSlamFilter::setKeyframePoses(const std::unordered_map<int64_t, Pose2>& p
   loadLocal();
 }
 
-std::vector<int64_t> PsmSlamFilter::keyframeIds() const {
-  std::vector<int64_t> ids;
-  ids.reserve(slot_of_.size());
-  for (const auto& [id, slot] : slot_of_) ids.push_back(id);
-  std::sort(ids.begin(), ids.end());
-  return ids;
-}
-
 Eigen::VectorXd PsmSlamFilter::stateMean() {
   flush();
   return x_.head(static_cast<Eigen::Index>(dimension()));

@@ -73,7 +73,6 @@ class PsmSlamFilter {
   bool hasKeyframe(int64_t id) const { return slot_of_.count(id) != 0; }
   int64_t activeKeyframe() const { return active_id_; }
   size_t keyframeCount() const { return slot_of_.size(); }
-  std::vector<int64_t> keyframeIds() const;
   /// Dimension of the stored state (3 per used slot, robot included).
   size_t dimension() const { return 3 * slot_end_; }
   /// How many O(n²) passes (compressed updates applied to the whole state) have run.

@@ -174,13 +174,22 @@ TEST(PsmBasin, HeadingErrorBeyondEveryWindowFailsCleanly) {
   ScanMatcher matcher(params);
   const PreparedScan ref = prepareScan(fixtures::simulateScan(room, {0.2, 0.3, 0.4}, {}), params);
   const PreparedScan cur = prepareScan(fixtures::simulateScan(room, {0.3, 0.3, 0.5}, {}), params);
+  const Pose2 truth = between(Pose2(0.2, 0.3, 0.4), Pose2(0.3, 0.3, 0.5));
+  int failed = 0;
   for (double error_deg : {90.0, 150.0, 180.0}) {
-    const MatchResult m = matcher.match(ref, cur, {0.1, 0.0, 0.1 + deg2rad(error_deg)});
-    EXPECT_GE(m.iterations, 0);
-    if (m.ok()) {
-      EXPECT_TRUE(std::isfinite(m.pose.x) && std::isfinite(m.cov(0, 0)));
+    const MatchResult m = matcher.match(ref, cur, {truth.x, truth.y, truth.theta + deg2rad(error_deg)});
+    EXPECT_GT(m.iterations, 0);
+    ASSERT_TRUE(std::isfinite(m.pose.x) && std::isfinite(m.pose.y) && std::isfinite(m.pose.theta)) << error_deg;
+    if (!m.ok()) {
+      ++failed;
+      continue;
     }
+    // A match that reports success from so far out must have found the truth, never a wrong pose.
+    EXPECT_LT((m.pose.translation() - truth.translation()).norm(), 0.05) << error_deg << " deg";
+    EXPECT_LT(std::abs(wrapAngle(m.pose.theta - truth.theta)), deg2rad(2.0)) << error_deg << " deg";
+    EXPECT_TRUE(m.cov.allFinite() && m.cov(0, 0) > 0.0);
   }
+  EXPECT_GE(failed, 1) << "the matcher's basin cannot reach 180 degrees of heading error";
 }
 
 // Accuracy on noisy pairs (σ = 1 cm) from small initial errors, every method; PSM should be at
