@@ -13,6 +13,7 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <filesystem>
 #include <future>
 #include <iostream>
 #include <optional>
@@ -22,6 +23,7 @@
 #include "common/pose_graph_message.hpp"
 #include "common/process_context.hpp"
 #include "grid/goal_planner.hpp"
+#include "io/safe_path.hpp"
 #include "pipeline/live_grid.hpp"
 #include "polarslam/goal_t.hpp"
 #include "polarslam/grid_request_t.hpp"
@@ -155,9 +157,16 @@ class GridNode {
     if (planner_.updateRobot(pose)) publishStatus();
   }
 
+  /// GRID_REQUEST: anyone on the network may send one, so its folder must stay below --out.
   void onRequest(const polarslam::grid_request_t& msg) {
+    std::string dir = o_.out_dir;
+    if (!msg.out_dir.empty()) {
+      std::string why;
+      const std::filesystem::path below = pathBelow(o_.out_dir, msg.out_dir, why);
+      if (below.empty()) return context_.reject("grid request: folder refused, " + why);
+      dir = below.string();
+    }
     context_.handled();
-    const std::string dir = msg.out_dir.empty() ? o_.out_dir : msg.out_dir;
     if (job_.valid()) queued_request_ = dir;  // after the running build, with the newest data
     else startBuild(dir);
   }

@@ -143,6 +143,13 @@ TEST(GridProcess, RegeneratesWritesTheGridAndPlansToAGoal) {
   const std::vector<uint8_t> garbage = {9, 9, 9};
   lcm.publish("SCAN_ANCHORS", garbage.data(), static_cast<unsigned>(garbage.size()));
   lcm.publish("SLAM_POSE", &static_cast<const polarslam::pose_t&>(toLcm(PoseStamped{7'000'000, {1.0, 0.8, 0.0}, Mat3::Identity() * 1e-4}, "map")));
+  // Folders from the network must stay below --out: these two are refused and counted.
+  for (const std::string outside : {"/tmp/polarslam-grid-request-escape", "../escape"}) {
+    polarslam::grid_request_t bad{};
+    bad.utime = 6'000'000;
+    bad.out_dir = outside;
+    lcm.publish("GRID_REQUEST", &bad);
+  }
   polarslam::grid_request_t request{};
   request.utime = 7'000'000;
   lcm.publish("GRID_REQUEST", &request);
@@ -184,8 +191,10 @@ TEST(GridProcess, RegeneratesWritesTheGridAndPlansToAGoal) {
     for (double t = 0; t <= 1.0; t += 0.01)
       EXPECT_GT(test::distanceToWalls(world, waypoints[i - 1] + t * (waypoints[i] - waypoints[i - 1])), 0.3);
 
-  handleUntil(lcm, 1500ms, [&] { return listener.grid_rejected >= 1; });
-  EXPECT_GE(listener.grid_rejected, 1) << "the malformed SCAN_ANCHORS message is counted";
+  handleUntil(lcm, 1500ms, [&] { return listener.grid_rejected >= 3; });
+  EXPECT_GE(listener.grid_rejected, 3) << "the malformed SCAN_ANCHORS message and the two folders out are counted";
+  EXPECT_FALSE(std::filesystem::exists("/tmp/polarslam-grid-request-escape"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "escape"));
   grid.signal(SIGINT);
   ASSERT_TRUE(grid.waitFor(10s));
   EXPECT_EQ(grid.exitCode(), 0);
