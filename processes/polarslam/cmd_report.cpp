@@ -1,5 +1,6 @@
 // polarslam report DIR: one page a person reads in a browser, from the run folders in DIR
-// (each written by `polarslam run`): the figures of every report.json and every PNG plot.
+// (each written by `polarslam run`): the figures of every report.json and every PNG plot, the
+// pictures embedded so that the page travels on its own.
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -28,6 +29,28 @@ std::string escapeHtml(const std::string& text) {
     }
   }
   return out;
+}
+
+std::string base64(const std::string& bytes) {
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    const size_t n = std::min<size_t>(3, bytes.size() - i);
+    uint32_t group = 0;
+    for (size_t k = 0; k < 3; ++k) group = (group << 8) | (k < n ? static_cast<uint8_t>(bytes[i + k]) : 0u);
+    for (size_t k = 0; k < 4; ++k) out += k <= n ? kAlphabet[(group >> (18 - 6 * k)) & 63] : '=';
+  }
+  return out;
+}
+
+/// The picture inside the page (a data: URL), so the report still shows everything when copied
+/// or mailed on its own.
+std::string embeddedPng(const fs::path& image) {
+  std::ifstream in(image, std::ios::binary);
+  std::stringstream bytes;
+  bytes << in.rdbuf();
+  return "data:image/png;base64," + base64(bytes.str());
 }
 
 std::string formatValue(const nlohmann::json& value) {
@@ -90,7 +113,7 @@ void runSection(const fs::path& dir, const fs::path& root, const nlohmann::json&
   std::sort(images.begin(), images.end());
   for (const auto& image : images) {
     const std::string rel = fs::relative(image, root).string();
-    html << "<figure><img src=\"" << escapeHtml(rel) << "\" alt=\"" << escapeHtml(rel) << "\"><figcaption>"
+    html << "<figure><img src=\"" << embeddedPng(image) << "\" alt=\"" << escapeHtml(rel) << "\"><figcaption>"
          << escapeHtml(image.filename().string()) << "</figcaption></figure>\n";
   }
   html << "</div><details><summary>all figures</summary><table>\n";
