@@ -18,8 +18,8 @@ add_custom_target(polarslam_lcmtypes_cpp DEPENDS ${POLARSLAM_LCM_HEADERS})
 add_library(polarslam_lcmtypes INTERFACE)
 add_dependencies(polarslam_lcmtypes polarslam_lcmtypes_cpp)
 # SYSTEM: generated headers trip -Wshadow/-Wconversion.
-target_include_directories(polarslam_lcmtypes SYSTEM INTERFACE ${LCMGEN_CPP_DIR} ${LCM_INCLUDE_DIR})
-target_link_libraries(polarslam_lcmtypes INTERFACE ${LCM_LIBRARY})
+target_include_directories(polarslam_lcmtypes SYSTEM INTERFACE ${LCMGEN_CPP_DIR})
+target_link_libraries(polarslam_lcmtypes INTERFACE PkgConfig::LCM)
 
 find_package(Java COMPONENTS Development)
 find_file(LCM_JAR lcm.jar PATHS /usr/share/java /usr/local/share/java)

@@ -8,6 +8,7 @@
 
 #include <iostream>
 
+#include "common/program_info.hpp"
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
 #include "slam/feature_slam.hpp"
@@ -17,6 +18,7 @@ using namespace polarslam;
 
 int main(int argc, char** argv) {
   CLI::App app{"polarslam-ekf-slam: EKF SLAM with line, corner and point features"};
+  addVersionFlag(app);
   std::string url, config;
   std::string odometry_channel = "ODOMETRY", features_channel = "FEATURES", laser_channel = "LASER",
               pose_channel = "SLAM_POSE", map_channel = "SLAM_MAP", anchors_channel = "SCAN_ANCHORS";

@@ -8,6 +8,7 @@
 
 #include <iostream>
 
+#include "common/program_info.hpp"
 #include "common/laser_feature_options.hpp"
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
@@ -17,6 +18,7 @@ using namespace polarslam;
 
 int main(int argc, char** argv) {
   CLI::App app{"polarslam-features: laser scans to polar line and right-angle corner features"};
+  addVersionFlag(app);
   std::string url, sensors = "fused", laser_channel = "LASER", features_channel = "LASER_FEATURES",
                    odometry_channel = "ODOMETRY", sonar_channel = "SONAR";
   LaserFeatureOptions options;

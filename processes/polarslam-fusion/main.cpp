@@ -7,6 +7,7 @@
 
 #include <iostream>
 
+#include "common/program_info.hpp"
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
 #include "pipeline/feature_pipeline.hpp"
@@ -16,6 +17,7 @@ using namespace polarslam;
 
 int main(int argc, char** argv) {
   CLI::App app{"polarslam-fusion: laser and advanced-sonar features fused into FEATURES"};
+  addVersionFlag(app);
   std::string url, config, sensors = "fused";
   std::string laser_features_channel = "LASER_FEATURES", sonar_channel = "SONAR", laser_channel = "LASER",
               odometry_channel = "ODOMETRY", out_channel = "FEATURES";

@@ -18,6 +18,7 @@
 #include <iostream>
 #include <optional>
 
+#include "common/program_info.hpp"
 #include "common/lcm_convert.hpp"
 #include "common/path_messages.hpp"
 #include "common/pose_graph_message.hpp"
@@ -317,6 +318,7 @@ void addChannelOptions(CLI::App& app, Channels& c) {
 
 int main(int argc, char** argv) {
   CLI::App app{"polarslam-grid: the live occupancy grid from EKF SLAM's anchored scans or PSM SLAM's pose graph"};
+  addVersionFlag(app);
   Options o;
   std::string url, source = "ekf", config;
   app.add_option("--source", source, "ekf (SCAN_ANCHORS + SLAM_MAP) | psm-slam (PSM_SLAM_ANCHORS + PSM_SLAM_GRAPH)")

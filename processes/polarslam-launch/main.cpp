@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "common/program_info.hpp"
 #include "common/process_context.hpp"
 #include "console.hpp"
 #include "launch/group_file.hpp"
@@ -62,6 +63,7 @@ void printCommands(const std::vector<CommandSpec>& commands) {
 
 int main(int argc, char** argv) {
   CLI::App app{"polarslam-launch: starts, watches and restarts a group of processes"};
+  addVersionFlag(app);
   std::string file, group, host, run_dir, url;
   bool no_tui = false, list = false;
   double status_period = 5.0;

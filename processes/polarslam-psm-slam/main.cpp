@@ -9,6 +9,7 @@
 #include <chrono>
 #include <iostream>
 
+#include "common/program_info.hpp"
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
 #include "common/pose_graph_message.hpp"
@@ -54,6 +55,7 @@ class GraphPublisher {
 
 int main(int argc, char** argv) {
   CLI::App app{"polarslam-psm-slam: SLAM with polar scan matching, loop closure and pose-graph optimisation"};
+  addVersionFlag(app);
   std::string url, config;
   double graph_period = 1.0;
   Channels channels;

@@ -5,6 +5,7 @@
 
 #include <iostream>
 
+#include "common/program_info.hpp"
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
 #include "polarslam/scan_match_t.hpp"
@@ -40,6 +41,7 @@ polarslam::scan_match_t matchMessage(const LaserOdometryUpdate& u, MatchMethod m
 
 int main(int argc, char** argv) {
   CLI::App app{"polarslam-psm: laser odometry by polar scan matching (PSM)"};
+  addVersionFlag(app);
   std::string url, method = "psm", covariance = "wls";
   bool ignore_odometry = false;
   Channels channels;

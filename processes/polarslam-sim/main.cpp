@@ -9,6 +9,7 @@
 #include <iostream>
 #include <thread>
 
+#include "common/program_info.hpp"
 #include "common/path_messages.hpp"
 #include "common/planned_path_driver.hpp"
 #include "common/process_context.hpp"
@@ -18,7 +19,8 @@ using namespace polarslam;
 
 int main(int argc, char** argv) {
   CLI::App app{"polarslam-sim: simulated robot publishing sensor data over LCM"};
-  std::string world = "config/worlds/office.yaml", robot = "config/robots/default.yaml", url;
+  addVersionFlag(app);
+  std::string world = dataPath("config/worlds/office.yaml"), robot = dataPath("config/robots/default.yaml"), url;
   double seconds = 0.0, speed = 1.0;
   uint64_t seed = 1;
   SensorChannels channels;

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "command_registry.hpp"
+#include "common/program_info.hpp"
 #include "common/lcm_log.hpp"
 #include "common/progress.hpp"
 #include "common/sim_channels.hpp"
@@ -11,8 +12,8 @@ namespace polarslam {
 namespace {
 
 struct SimulateOptions {
-  std::string world = "config/worlds/office.yaml";
-  std::string robot = "config/robots/default.yaml";
+  std::string world = dataPath("config/worlds/office.yaml");
+  std::string robot = dataPath("config/robots/default.yaml");
   std::string out;
   double seconds = 0.0;
   uint64_t seed = 1;

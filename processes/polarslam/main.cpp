@@ -3,6 +3,7 @@
 #include <exception>
 #include <iostream>
 
+#include "common/program_info.hpp"
 #include "command_registry.hpp"
 
 namespace polarslam {
@@ -14,12 +15,14 @@ std::vector<Command>& registeredCommands() {
 
 int main(int argc, char** argv) {
   CLI::App app{"polarslam: 2D SLAM with laser, advanced sonar and odometry"};
-  app.require_subcommand(1);
+  polarslam::addVersionFlag(app);
+  app.require_subcommand(0, 1);
   auto& commands = polarslam::registeredCommands();
   std::sort(commands.begin(), commands.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
   for (auto& command : commands) command.setup(*app.add_subcommand(command.name, command.help));
   try {
     app.parse(argc, argv);
+    if (app.get_subcommands().empty()) std::cout << app.help();
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const std::exception& e) {

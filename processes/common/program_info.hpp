@@ -1,0 +1,23 @@
+#pragma once
+// What every polarslam program knows about itself: its version (--version) and where the data
+// installed with it lives (config/ files), so that defaults such as config/robots/default.yaml
+// are found from any folder — installed (<prefix>/bin → <prefix>/share/polarslam) or in the
+// build tree (the source tree's files).
+#include <string>
+
+namespace CLI {
+class App;
+}  // namespace CLI
+
+namespace polarslam {
+
+/// "polarslam 0.2.0 (git 1a2b3c4)".
+std::string polarslamVersion();
+/// Adds --version (prints polarslamVersion() and exits).
+void addVersionFlag(CLI::App& app);
+/// The folder holding config/ (and logs/ in the source tree).
+std::string dataDirectory();
+/// dataDirectory() / relative, e.g. dataPath("config/robots/default.yaml").
+std::string dataPath(const std::string& relative);
+
+}  // namespace polarslam
