@@ -1,6 +1,9 @@
 #include "pipeline/estimator.hpp"
 
+#include <filesystem>
+
 #include "pipeline/feature_slam_estimator.hpp"
+#include "pipeline/g2o_export.hpp"
 
 namespace polarslam {
 
@@ -10,6 +13,22 @@ void OdometryEstimator::onOdometry(const OdometryReading& odometry) {
     started_ = true;
   }
   trajectory_.push_back({odometry.utime, origin_inverse_ * odometry.pose, odometry.cov});
+}
+
+void LaserOdometryEstimator::onLaser(const LaserScan& scan) {
+  if (!validateScan(scan).empty()) {
+    ++unusable_scans_;
+    return;
+  }
+  odometry_.addScan(scan);
+}
+
+void LaserOdometryEstimator::finish(const std::string&, nlohmann::json& report) {
+  report["laser_odometry"] = {{"scans", odometry_.scans()},
+                              {"keyframes", odometry_.keyframes()},
+                              {"failed_matches", odometry_.failedMatches()},
+                              {"held_scans", odometry_.heldScans()},
+                              {"unusable_scans", unusable_scans_}};
 }
 
 bool RecordedEstimator::inOrder(int64_t& last, int64_t utime) {
@@ -43,7 +62,8 @@ void RecordedEstimator::onPoseGraph(const PoseGraph& graph) {
   ++graphs_;
 }
 
-void RecordedEstimator::finish(const std::string&, nlohmann::json& report) {
+void RecordedEstimator::finish(const std::string& out_dir, nlohmann::json& report) {
+  if (graph_ && !out_dir.empty()) writeG2o((std::filesystem::path(out_dir) / "graph.g2o").string(), *graph_);
   std::string final_source = "published poses (nothing to re-place them with)";
   size_t missing_nodes = 0;
   online_ = scan_anchors_.empty() ? published_ : anchorPoses(scan_anchors_);

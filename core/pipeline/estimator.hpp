@@ -12,6 +12,7 @@
 #include "geometry/features.hpp"
 #include "laser/laser_scan.hpp"
 #include "odometry/odometry_reading.hpp"
+#include "scanmatch/laser_odometry.hpp"
 #include "slam/feature_map.hpp"
 #include "slam/pose_graph.hpp"
 #include "sonar/sonar_targets.hpp"
@@ -53,6 +54,21 @@ class OdometryEstimator : public Estimator {
   bool started_ = false;
   Pose2 origin_inverse_;
   std::vector<PoseStamped> trajectory_;
+};
+
+/// Laser odometry by polar scan matching (`polarslam run --pipeline psm`): the LaserOdometry
+/// class the live polarslam-psm process runs, with its default parameters.
+class LaserOdometryEstimator : public Estimator {
+ public:
+  std::string name() const override { return "psm"; }
+  void onOdometry(const OdometryReading& odometry) override { odometry_.addOdometry(odometry); }
+  void onLaser(const LaserScan& scan) override;
+  const std::vector<PoseStamped>& trajectory() const override { return odometry_.trajectory(); }
+  void finish(const std::string& out_dir, nlohmann::json& report) override;
+
+ private:
+  LaserOdometry odometry_;
+  long unusable_scans_ = 0;
 };
 
 /// A live run scored from its recording (lcm-logger): evaluates it with the same figures and

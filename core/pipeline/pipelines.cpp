@@ -9,6 +9,7 @@ const std::map<std::string, PipelineFactory>& pipelines() {
   static const std::map<std::string, PipelineFactory> factories = {
       {"odometry", [](const PipelineOptions&) { return std::make_unique<OdometryEstimator>(); }},
       {"recorded", [](const PipelineOptions&) { return std::make_unique<RecordedEstimator>(); }},
+      {"psm", [](const PipelineOptions&) { return std::make_unique<LaserOdometryEstimator>(); }},
       {"ekf",
        [](const PipelineOptions& o) -> std::unique_ptr<Estimator> {
          const SlamSensors sensors = parseSlamSensors(o.sensors);

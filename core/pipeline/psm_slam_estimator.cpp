@@ -1,8 +1,10 @@
 #include "pipeline/psm_slam_estimator.hpp"
 
 #include <chrono>
+#include <filesystem>
 
 #include "grid/grid_files.hpp"
+#include "pipeline/g2o_export.hpp"
 
 namespace polarslam {
 namespace {
@@ -112,7 +114,9 @@ void PsmSlamEstimator::finish(const std::string& out_dir, nlohmann::json& report
   nlohmann::json section = psmSlamReportJson(slam_, summary);
   section["slam_seconds"] = slam_seconds_;
   report["psm_slam"] = section;
-  if (!out_dir.empty()) writeMap(out_dir, report);
+  if (out_dir.empty()) return;
+  writeMap(out_dir, report);
+  writeG2o((std::filesystem::path(out_dir) / "graph.g2o").string(), slam_.graph());
 }
 
 void PsmSlamEstimator::writeMap(const std::string& out_dir, nlohmann::json& report) {

@@ -1,6 +1,7 @@
-// polarslam import IN -o OUT.lcmlog [--format auto|carmen|cmu|duke|mines]: a range log (CARMEN,
-// CMU Wean Hall, Duke DP-SLAM, Mines ParisTech; plain or gzip) as an LCM log of LASER and
-// ODOMETRY messages, keeping the log's timestamps and their order.
+// polarslam import IN -o OUT.lcmlog [--format auto|carmen|cmu|duke|mines|rosbag]: a range log
+// (CARMEN, CMU Wean Hall, Duke DP-SLAM, Mines ParisTech; plain or gzip) or a ROS 1 bag
+// (sensor_msgs/LaserScan, nav_msgs/Odometry, tf) as an LCM log of LASER and ODOMETRY messages,
+// keeping the log's timestamps and their order.
 // polarslam import-carmen IN.clf -o OUT.lcmlog: the same with the format fixed to CARMEN.
 #include <algorithm>
 #include <iostream>
@@ -12,6 +13,9 @@
 #include "common/progress.hpp"
 #include "io/log_lines.hpp"
 #include "io/range_log.hpp"
+#ifdef POLARSLAM_HAVE_ROSBAG
+#include "rosbag/ros_bag_log.hpp"
+#endif
 
 namespace polarslam {
 namespace {
@@ -21,6 +25,7 @@ struct ImportOptions {
   std::string in, out;
   std::string format = "auto";
   std::string laser_channel = "LASER", odometry_channel = "ODOMETRY";
+  std::string laser_topic, odometry_topic;  ///< ROS bags: "" = the bag's only one
   double no_return_range = 0.0;    ///< 0: the format's default
   std::vector<double> laser_pose;  ///< empty: the format's default
   double period = DukeOptions{}.period;
@@ -69,19 +74,34 @@ RangeLogOptions readerOptions(const ImportOptions& o) {
   return options;
 }
 
-void importRangeLog(const ImportOptions& o) {
+/// The input as a range log; `format` receives the format's name.
+RangeLog readInput(const ImportOptions& o, ProgressBar& progress, std::string& format) {
+#ifdef POLARSLAM_HAVE_ROSBAG
+  if (o.format == "rosbag" || (o.format == "auto" && looksLikeRosBag(o.in))) {
+    format = "rosbag";
+    return readRosBag(o.in, {o.laser_topic, o.odometry_topic});
+  }
+#else
+  if (o.format == "rosbag") throw std::runtime_error("this build has no ROS 1 bag support (librosbag-dev)");
+#endif
   const std::optional<RangeLogFormat> requested = parseRangeLogFormat(o.format);
-  if (!requested) throw std::runtime_error("unknown format '" + o.format + "' (auto, carmen, cmu, duke, mines)");
-  ProgressBar progress(o.command);
+  if (!requested) throw std::runtime_error("unknown format '" + o.format + "' (auto, carmen, cmu, duke, mines, rosbag)");
   const std::string text = readMaybeGzipFile(o.in, "range log");
-  const RangeLogFormat format = *requested == RangeLogFormat::Auto ? detectRangeLogFormat(text, o.in) : *requested;
+  const RangeLogFormat detected = *requested == RangeLogFormat::Auto ? detectRangeLogFormat(text, o.in) : *requested;
+  format = rangeLogFormatName(detected);
   RangeLogOptions options = readerOptions(o);
   const auto report = [&](double f) { progress.update(0.8 * f); };
   options.carmen.progress = options.cmu.progress = options.duke.progress = options.mines.progress = report;
-  const RangeLog log = readRangeLogText(text, o.in, format, options);
+  return readRangeLogText(text, o.in, detected, options);
+}
+
+void importRangeLog(const ImportOptions& o) {
+  ProgressBar progress(o.command);
+  std::string format;
+  const RangeLog log = readInput(o, progress, format);
   if (log.events.empty()) {
     progress.finish();
-    std::string why = "'" + o.in + "' holds no laser or odometry line of the " + rangeLogFormatName(format) +
+    std::string why = "'" + o.in + "' holds no laser or odometry line of the " + format +
                       " format (" + summary(log) + ")";
     if (!log.malformed.empty()) why += "; first problem: " + o.in + ":" + std::to_string(log.malformed[0].line) + ": " + log.malformed[0].reason;
     throw std::runtime_error(why);
@@ -104,7 +124,7 @@ void importRangeLog(const ImportOptions& o) {
   progress.finish();
 
   const std::string& c = o.command;
-  std::cout << c << ": " << rangeLogFormatName(format) << " log, " << summary(log) << "\n";
+  std::cout << c << ": " << format << " log, " << summary(log) << "\n";
   std::cout << c << ": wrote " << lasers << " " << o.laser_channel << " and " << odometries << " "
             << o.odometry_channel << " messages to " << o.out << "\n";
   for (const std::string& note : log.notes) std::cout << c << ": " << note << "\n";
@@ -123,31 +143,36 @@ void importRangeLog(const ImportOptions& o) {
     std::cout << "  ... and " << log.malformed_count - static_cast<int64_t>(shown) << " more malformed lines\n";
 }
 
-void addCommonOptions(CLI::App& sub, ImportOptions& o) {
+/// The options of `import`; `import-carmen` has the same ones, with the format fixed.
+void addImportOptions(CLI::App& sub, ImportOptions& o) {
   sub.add_option("-o,--out", o.out, "LCM log to write")->required();
-  sub.add_option("--laser-channel", o.laser_channel)->capture_default_str();
-  sub.add_option("--odometry-channel", o.odometry_channel)->capture_default_str();
+  sub.add_option("--laser-channel", o.laser_channel, "channel of the LASER messages written")->capture_default_str();
+  sub.add_option("--odometry-channel", o.odometry_channel, "channel of the ODOMETRY messages written")
+      ->capture_default_str();
   sub.add_option("--show-malformed", o.show_malformed, "how many malformed lines to list")->capture_default_str();
+  sub.add_option("--no-return-range", o.no_return_range,
+                 "ranges at or above this (m) are 'no return' (default per format: CARMEN and CMU 80, Duke 8.18; "
+                 "for Mines, the scans' range_max, 5.6)")
+      ->check(CLI::NonNegativeNumber);
+  sub.add_option("--laser-pose", o.laser_pose,
+                 "laser mount x y theta (m, m, rad) (default per format: CMU 0.25 0 0, Mines 0.07 0 0, none for "
+                 "CARMEN FLASER and Duke; ROBOTLASER1 lines carry their own)")
+      ->expected(3);
+  sub.add_option("--period", o.period, "Duke logs, which have no timestamps: seconds between Odometry+Laser pairs")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  sub.add_option("--laser-topic", o.laser_topic, "ROS bags: the sensor_msgs/LaserScan topic (default: the only one)");
+  sub.add_option("--odometry-topic", o.odometry_topic, "ROS bags: the nav_msgs/Odometry topic (default: the only one)");
 }
 
 void setupImport(CLI::App& sub) {
   auto o = std::make_shared<ImportOptions>();
   o->command = "import";
-  sub.add_option("input", o->in, "range log, plain or .gz: CARMEN .clf, CMU robotdata*.log, Duke loop5.log, Mines exp*.dat")
+  sub.add_option("input", o->in,
+                 "range log, plain or .gz: CARMEN .clf, CMU robotdata*.log, Duke loop5.log, Mines exp*.dat; or a ROS 1 .bag")
       ->required()->check(CLI::ExistingFile);
-  addCommonOptions(sub, *o);
-  sub.add_option("--format", o->format, "auto (from the content), carmen, cmu, duke or mines")
-      ->check(CLI::IsMember({"auto", "carmen", "cmu", "duke", "mines"}))->capture_default_str();
-  sub.add_option("--no-return-range", o->no_return_range,
-                 "ranges at or above this (m) are 'no return' (default per format: CARMEN and CMU 80, Duke 8.18; "
-                 "for Mines, the scans' range_max, 5.6)")
-      ->check(CLI::NonNegativeNumber);
-  sub.add_option("--laser-pose", o->laser_pose,
-                 "laser mount x y theta (m, m, rad) (default per format: CMU 0.25 0 0, Mines 0.07 0 0, none for "
-                 "CARMEN FLASER and Duke; ROBOTLASER1 lines carry their own)")
-      ->expected(3);
-  sub.add_option("--period", o->period, "Duke logs, which have no timestamps: seconds between Odometry+Laser pairs")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+  sub.add_option("--format", o->format, "auto (from the content), carmen, cmu, duke, mines or rosbag")
+      ->check(CLI::IsMember({"auto", "carmen", "cmu", "duke", "mines", "rosbag"}))->capture_default_str();
+  addImportOptions(sub, *o);
   sub.callback([o] { importRangeLog(*o); });
 }
 
@@ -155,19 +180,12 @@ void setupImportCarmen(CLI::App& sub) {
   auto o = std::make_shared<ImportOptions>();
   o->command = "import-carmen";
   o->format = "carmen";
-  o->no_return_range = CarmenOptions{}.no_return_range;
-  o->laser_pose = {0.0, 0.0, 0.0};
   sub.add_option("input", o->in, "CARMEN log (.clf)")->required()->check(CLI::ExistingFile);
-  addCommonOptions(sub, *o);
-  sub.add_option("--no-return-range", o->no_return_range, "ranges at or above this (m) are 'no return'")
-      ->check(CLI::PositiveNumber)->capture_default_str();
-  sub.add_option("--flaser-laser-pose", o->laser_pose,
-                 "laser mount x y theta (m, m, rad) for FLASER lines, which do not record it")
-      ->expected(3)->capture_default_str();
+  addImportOptions(sub, *o);
   sub.callback([o] { importRangeLog(*o); });
 }
 
-RegisterCommand reg_import("import", "Convert a range log (CARMEN, CMU, Duke, Mines; plain or gzip) into an LCM log",
+RegisterCommand reg_import("import", "Convert a range log (CARMEN, CMU, Duke, Mines; plain or gzip) or a ROS 1 bag into an LCM log",
                            setupImport);
 RegisterCommand reg_carmen("import-carmen", "Convert a CARMEN log (FLASER, ROBOTLASER1, ODOM) into an LCM log "
                            "(import --format carmen)", setupImportCarmen);
