@@ -18,6 +18,7 @@ class LaserFeatureOptions {
   void add(CLI::App& app);
   /// The EKF pipeline's configuration from the file (the default robot's without one).
   FeaturePipelineConfig resolvePipeline(SlamSensors sensors) const;
+  const std::string& configPath() const { return config_; }
 
  private:
   std::string config_;

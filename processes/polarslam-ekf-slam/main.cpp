@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "common/program_info.hpp"
+#include "pipeline/pipelines.hpp"
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
 #include "slam/feature_slam.hpp"
@@ -26,17 +27,23 @@ int main(int argc, char** argv) {
   app.add_option("--config", config, "robot file or estimator file (see core/pipeline/feature_slam_estimator.hpp)")
       ->check(CLI::ExistingFile);
   app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
-  app.add_option("--odometry-channel", odometry_channel)->capture_default_str();
-  app.add_option("--features-channel", features_channel)->capture_default_str();
+  app.add_option("--odometry-channel", odometry_channel, "channel of the odometry (odometry_t)")->capture_default_str();
+  app.add_option("--features-channel", features_channel, "channel of the feature sets (features_t)")->capture_default_str();
   app.add_option("--laser-channel", laser_channel, "scan time stamps for SCAN_ANCHORS ('' = none)")->capture_default_str();
-  app.add_option("--pose-channel", pose_channel)->capture_default_str();
-  app.add_option("--map-channel", map_channel)->capture_default_str();
-  app.add_option("--anchors-channel", anchors_channel)->capture_default_str();
+  app.add_option("--pose-channel", pose_channel, "channel of the robot poses (pose_t)")->capture_default_str();
+  app.add_option("--map-channel", map_channel, "channel of the feature map (slam_map_t)")->capture_default_str();
+  app.add_option("--anchors-channel", anchors_channel, "channel of the scan anchors (scan_anchors_t)")->capture_default_str();
   app.add_option("--map-period", map_period, "s between SLAM_MAP messages (stream time)")->check(CLI::PositiveNumber)
       ->capture_default_str();
   JournalOptions journal;
   addJournalOptions(app, journal);
+  bool print_config = false;
+  app.add_flag("--print-config", print_config, "print the parameters in effect (YAML) and exit");
   CLI11_PARSE(app, argc, argv);
+  if (print_config) {
+    std::cout << effectiveConfigYaml("ekf", {"fused", config});
+    return 0;
+  }
 
   try {
     const FeaturePipelineConfig cfg = loadFeaturePipelineConfig(config, SlamSensors::Fused);

@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "common/program_info.hpp"
+#include "pipeline/pipelines.hpp"
 #include "common/laser_feature_options.hpp"
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
@@ -26,12 +27,18 @@ int main(int argc, char** argv) {
   app.add_option("--sensors", sensors, "laser | sonar | fused (fused: sonar break hints)")
       ->check(CLI::IsMember({"laser", "sonar", "fused"}))->capture_default_str();
   app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
-  app.add_option("--laser-channel", laser_channel)->capture_default_str();
-  app.add_option("--features-channel", features_channel)->capture_default_str();
+  app.add_option("--laser-channel", laser_channel, "channel of the laser scans (laser_scan_t)")->capture_default_str();
+  app.add_option("--features-channel", features_channel, "channel of the feature sets (features_t)")->capture_default_str();
   app.add_option("--odometry-channel", odometry_channel, "speed for the motion error term; \"\" = none")
       ->capture_default_str();
   app.add_option("--sonar-channel", sonar_channel, "sonar cycles for break hints (fused sensors)")->capture_default_str();
+  bool print_config = false;
+  app.add_flag("--print-config", print_config, "print the parameters in effect (YAML) and exit");
   CLI11_PARSE(app, argc, argv);
+  if (print_config) {
+    std::cout << effectiveConfigYaml("ekf", {sensors, options.configPath()});
+    return 0;
+  }
 
   try {
     LaserFeatureStage stage(options.resolvePipeline(parseSlamSensors(sensors)));

@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "common/program_info.hpp"
+#include "pipeline/pipelines.hpp"
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
 #include "pipeline/feature_pipeline.hpp"
@@ -26,12 +27,18 @@ int main(int argc, char** argv) {
   app.add_option("--sensors", sensors, "laser | sonar | fused")->check(CLI::IsMember({"laser", "sonar", "fused"}))
       ->capture_default_str();
   app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
-  app.add_option("--laser-features-channel", laser_features_channel)->capture_default_str();
-  app.add_option("--sonar-channel", sonar_channel)->capture_default_str();
+  app.add_option("--laser-features-channel", laser_features_channel, "channel of the laser feature sets, laser frame (features_t)")->capture_default_str();
+  app.add_option("--sonar-channel", sonar_channel, "channel of the advanced-sonar cycles (sonar_targets_t)")->capture_default_str();
   app.add_option("--laser-channel", laser_channel, "raw scans for laser-aided sonar selection")->capture_default_str();
-  app.add_option("--odometry-channel", odometry_channel)->capture_default_str();
-  app.add_option("--out-channel", out_channel)->capture_default_str();
+  app.add_option("--odometry-channel", odometry_channel, "channel of the odometry (odometry_t)")->capture_default_str();
+  app.add_option("--out-channel", out_channel, "channel of the fused feature sets, base frame (features_t)")->capture_default_str();
+  bool print_config = false;
+  app.add_flag("--print-config", print_config, "print the parameters in effect (YAML) and exit");
   CLI11_PARSE(app, argc, argv);
+  if (print_config) {
+    std::cout << effectiveConfigYaml("ekf", {sensors, config});
+    return 0;
+  }
 
   try {
     const SlamSensors which = parseSlamSensors(sensors);

@@ -300,18 +300,18 @@ class GridNode {
 };
 
 void addChannelOptions(CLI::App& app, Channels& c) {
-  app.add_option("--laser-channel", c.laser)->capture_default_str();
+  app.add_option("--laser-channel", c.laser, "channel of the laser scans (laser_scan_t)")->capture_default_str();
   app.add_option("--anchors-channel", c.anchors, "ekf: scan anchors")->capture_default_str();
   app.add_option("--map-channel", c.map, "ekf: feature map")->capture_default_str();
   app.add_option("--psm-anchors-channel", c.psm_anchors, "psm-slam: anchored poses")->capture_default_str();
   app.add_option("--graph-channel", c.graph, "psm-slam: pose graph")->capture_default_str();
   app.add_option("--pose-channel", c.pose, "robot pose for planning")->capture_default_str();
-  app.add_option("--request-channel", c.request)->capture_default_str();
+  app.add_option("--request-channel", c.request, "channel of the grid requests (grid_request_t)")->capture_default_str();
   app.add_option("--goal-channel", c.goal, "\"\" = no planning")->capture_default_str();
   app.add_option("--grid-map-channel", c.grid_map, "grid_map_t after every rebuild")->capture_default_str();
-  app.add_option("--grid-path-channel", c.grid_path)->capture_default_str();
-  app.add_option("--planned-path-channel", c.planned_path)->capture_default_str();
-  app.add_option("--status-channel", c.status)->capture_default_str();
+  app.add_option("--grid-path-channel", c.grid_path, "channel of the regenerated scan poses (path_t)")->capture_default_str();
+  app.add_option("--planned-path-channel", c.planned_path, "channel of the planned paths (path_t)")->capture_default_str();
+  app.add_option("--status-channel", c.status, "channel of the status (grid_status_t)")->capture_default_str();
 }
 
 }  // namespace

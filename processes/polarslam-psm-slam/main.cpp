@@ -10,6 +10,7 @@
 #include <iostream>
 
 #include "common/program_info.hpp"
+#include "pipeline/pipelines.hpp"
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
 #include "common/pose_graph_message.hpp"
@@ -64,14 +65,20 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_option("--graph-period", graph_period, "s between PSM_SLAM_GRAPH messages at most")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
-  app.add_option("--laser-channel", channels.laser)->capture_default_str();
-  app.add_option("--odometry-channel", channels.odometry)->capture_default_str();
-  app.add_option("--pose-channel", channels.pose)->capture_default_str();
+  app.add_option("--laser-channel", channels.laser, "channel of the laser scans (laser_scan_t)")->capture_default_str();
+  app.add_option("--odometry-channel", channels.odometry, "channel of the odometry (odometry_t)")->capture_default_str();
+  app.add_option("--pose-channel", channels.pose, "channel of the robot poses (pose_t)")->capture_default_str();
   app.add_option("--anchors-channel", channels.anchors, "poses relative to their reference scan")->capture_default_str();
-  app.add_option("--graph-channel", channels.graph)->capture_default_str();
+  app.add_option("--graph-channel", channels.graph, "channel of the pose graph (pose_graph_t)")->capture_default_str();
   JournalOptions journal;
   addJournalOptions(app, journal);
+  bool print_config = false;
+  app.add_flag("--print-config", print_config, "print the parameters in effect (YAML) and exit");
   CLI11_PARSE(app, argc, argv);
+  if (print_config) {
+    std::cout << effectiveConfigYaml("psm-slam", {"fused", config});
+    return 0;
+  }
 
   try {
     PsmSlam slam(config.empty() ? PsmSlamParams{} : loadPsmSlamEstimatorConfig(config).slam);

@@ -55,10 +55,10 @@ int main(int argc, char** argv) {
   app.add_option("--keyframe-distance", params.keyframe_distance, "m of motion before a new keyframe")->capture_default_str();
   app.add_option("--keyframe-angle", params.keyframe_angle, "rad of rotation before a new keyframe")->capture_default_str();
   app.add_flag("--ignore-odometry", ignore_odometry, "do not use ODOMETRY as the prior (constant velocity instead)");
-  app.add_option("--laser-channel", channels.laser)->capture_default_str();
-  app.add_option("--odometry-channel", channels.odometry)->capture_default_str();
-  app.add_option("--pose-channel", channels.pose)->capture_default_str();
-  app.add_option("--matches-channel", channels.matches)->capture_default_str();
+  app.add_option("--laser-channel", channels.laser, "channel of the laser scans (laser_scan_t)")->capture_default_str();
+  app.add_option("--odometry-channel", channels.odometry, "channel of the odometry (odometry_t)")->capture_default_str();
+  app.add_option("--pose-channel", channels.pose, "channel of the robot poses (pose_t)")->capture_default_str();
+  app.add_option("--matches-channel", channels.matches, "channel of the scan matches (scan_match_t)")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   parseMatchMethod(method, params.method);
   parseCovarianceModel(covariance, psm.covariance);

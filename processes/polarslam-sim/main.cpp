@@ -31,10 +31,10 @@ int main(int argc, char** argv) {
   app.add_option("--speed", speed, "multiple of real time (0 = as fast as possible)")->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--seed", seed, "random seed")->capture_default_str();
   app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
-  app.add_option("--laser-channel", channels.laser)->capture_default_str();
-  app.add_option("--sonar-channel", channels.sonar)->capture_default_str();
-  app.add_option("--odometry-channel", channels.odometry)->capture_default_str();
-  app.add_option("--ground-truth-channel", channels.ground_truth)->capture_default_str();
+  app.add_option("--laser-channel", channels.laser, "channel of the laser scans (laser_scan_t)")->capture_default_str();
+  app.add_option("--sonar-channel", channels.sonar, "channel of the advanced-sonar cycles (sonar_targets_t)")->capture_default_str();
+  app.add_option("--odometry-channel", channels.odometry, "channel of the odometry (odometry_t)")->capture_default_str();
+  app.add_option("--ground-truth-channel", channels.ground_truth, "channel of the ground-truth poses (pose_t)")->capture_default_str();
   app.add_option("--path-channel", path_channel, "follow planned paths (path_t, map frame) from this channel, e.g. PLANNED_PATH");
   app.add_option("--pose-channel", pose_channel, "SLAM pose locating the robot in the path's map frame ('' = the true pose in the start frame)")
       ->capture_default_str();

@@ -130,7 +130,7 @@ void setupEval(CLI::App& sub) {
                     ->check(CLI::ExistingFile);
   relations->excludes(truth);
   truth->excludes(relations);
-  sub.add_option("--channel", o->channel, "ground-truth channel in the LCM log")->capture_default_str();
+  sub.add_option("--ground-truth-channel", o->channel, "pose_t channel of the ground truth in the --ground-truth log")->capture_default_str();
   sub.add_option("--ground-truth-frame", o->ground_truth_frame,
                  "start: ground truth re-expressed in the frame of its first pose, as `polarslam run` "
                  "estimates are; world: as logged")

@@ -1,5 +1,5 @@
 // polarslam features: laser features of every scan in an LCM log, one JSON object per line.
-//   polarslam features --log run.lcmlog --out features.jsonl [--channel LASER] [--config FILE]
+//   polarslam features --log run.lcmlog -o features.jsonl [--laser-channel LASER] [--config FILE]
 // The extraction is the live process's (polarslam-features): the same LaserFeatureStage, fed
 // LASER, SONAR (break hints, fused sensors) and ODOMETRY in log order, with the same options.
 #include <nlohmann/json.hpp>
@@ -108,8 +108,8 @@ void runFeatures(const FeaturesCommand& cmd) {
 void setupFeatures(CLI::App& sub) {
   auto cmd = std::make_shared<FeaturesCommand>();
   sub.add_option("--log", cmd->log, "input LCM log")->required()->check(CLI::ExistingFile);
-  sub.add_option("--out", cmd->out, "output JSON lines, one object per scan")->required();
-  sub.add_option("--channel", cmd->channel, "laser channel")->capture_default_str();
+  sub.add_option("-o,--out", cmd->out, "output JSON lines, one object per scan")->required();
+  sub.add_option("--laser-channel", cmd->channel, "channel of the laser scans (laser_scan_t)")->capture_default_str();
   sub.add_option("--odometry-channel", cmd->odometry_channel, "speed for the motion error term; \"\" = none")
       ->capture_default_str();
   sub.add_option("--sonar-channel", cmd->sonar_channel, "sonar cycles for break hints (fused sensors)")

@@ -139,7 +139,7 @@ void setupMatch(CLI::App& sub) {
   auto o = std::make_shared<MatchOptions>();
   sub.add_option("--pairs", o->pairs, "JSON lines: {\"ref\": SCAN, \"cur\": SCAN, \"guess\": [x, y, theta]}")
       ->required()->check(CLI::ExistingFile);
-  sub.add_option("--out", o->out, "JSON lines, one result per input line")->required();
+  sub.add_option("-o,--out", o->out, "JSON lines, one result per input line")->required();
   sub.add_option("--method", o->method)->check(CLI::IsMember({"psm", "psm-c", "icp"}))->capture_default_str();
   sub.add_option("--covariance", o->covariance)->check(CLI::IsMember({"wls", "heuristic"}))->capture_default_str();
   sub.add_option("--decimation", o->decimation, "use every n-th beam")->check(CLI::Range(1, 16))->capture_default_str();

@@ -183,11 +183,11 @@ void setupRun(CLI::App& sub) {
   sub.add_option("--sensors", o->pipeline_options.sensors, "features for feature SLAM")
       ->check(CLI::IsMember({"laser", "sonar", "fused"}))->capture_default_str();
   sub.add_option("--config", o->pipeline_options.config, "estimator parameters (YAML)")->check(CLI::ExistingFile);
-  sub.add_option("--out", o->out, "output folder");
-  sub.add_option("--laser-channel", o->channels.laser)->capture_default_str();
-  sub.add_option("--sonar-channel", o->channels.sonar)->capture_default_str();
-  sub.add_option("--odometry-channel", o->channels.odometry)->capture_default_str();
-  sub.add_option("--ground-truth-channel", o->channels.ground_truth)->capture_default_str();
+  sub.add_option("-o,--out", o->out, "output folder");
+  sub.add_option("--laser-channel", o->channels.laser, "channel of the laser scans (laser_scan_t)")->capture_default_str();
+  sub.add_option("--sonar-channel", o->channels.sonar, "channel of the advanced-sonar cycles (sonar_targets_t)")->capture_default_str();
+  sub.add_option("--odometry-channel", o->channels.odometry, "channel of the odometry (odometry_t)")->capture_default_str();
+  sub.add_option("--ground-truth-channel", o->channels.ground_truth, "channel of the ground-truth poses (pose_t)")->capture_default_str();
   sub.add_option("--pose-channel", o->channels.estimated_pose,
                  "with --pipeline recorded: the pose_t channel a live run published (e.g. SLAM_POSE)");
   sub.add_option("--anchors-channel", o->channels.scan_anchors,

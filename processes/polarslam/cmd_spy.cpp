@@ -74,7 +74,7 @@ void setupSpy(CLI::App& sub) {
 
 void setupLogInfo(CLI::App& sub) {
   auto path = std::make_shared<std::string>();
-  sub.add_option("log", *path, "LCM log file")->required()->check(CLI::ExistingFile);
+  sub.add_option("--log", *path, "LCM log file")->required()->check(CLI::ExistingFile);
   sub.callback([path] {
     LcmLogReader reader(*path);
     ChannelTable table;
