@@ -150,6 +150,7 @@ polarslam::pose_t toLcm(const PoseStamped& pose, const std::string& frame, int64
 
 std::string fromLcm(const polarslam::pose_t& msg, PoseStamped& out) {
   if (!finite({msg.x, msg.y, msg.theta}) || !finiteMatrix<3>(msg.cov)) return "pose: non-finite value";
+  if (std::abs(msg.x) > 1e6 || std::abs(msg.y) > 1e6) return "pose: absurd position";
   out.utime = msg.utime;
   out.pose = {msg.x, msg.y, wrapAngle(msg.theta)};
   out.cov = readMatrix<3>(msg.cov);

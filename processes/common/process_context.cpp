@@ -9,6 +9,8 @@
 #include <iostream>
 #include <stdexcept>
 
+#include <CLI/CLI.hpp>
+
 #include "polarslam/process_status_t.hpp"
 
 namespace polarslam {
@@ -70,6 +72,20 @@ ProcessContext::ProcessContext(std::string name, const std::string& lcm_url)
   if (!lcm_->good())
     throw std::runtime_error("cannot open LCM at '" + resolveLcmUrl(lcm_url) +
                              "' (no multicast route? try: ip route add 224.0.0.0/4 dev lo)");
+}
+
+ProcessContext::ProcessContext(std::string name, const ProcessOptions& options)
+    : ProcessContext(std::move(name), options.lcm_url) {
+  time_gate_ = StreamTimeGate({static_cast<int64_t>(options.max_time_jump_s * 1e6), 3});
+}
+
+void addProcessOptions(CLI::App& app, ProcessOptions& options) {
+  app.add_option("--lcm-url", options.lcm_url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
+  app.add_option("--max-time-jump", options.max_time_jump_s,
+                 "s: input stamped further than this from the other input is rejected and counted, "
+                 "not adopted as the clock")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
 }
 
 void ProcessContext::reject(const std::string& kind) {

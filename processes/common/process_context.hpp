@@ -16,6 +16,11 @@
 #include "common/input_journal.hpp"
 #include "common/lcm_convert.hpp"
 #include "common/lcm_decode.hpp"
+#include "io/stream_time_gate.hpp"
+
+namespace CLI {
+class App;
+}  // namespace CLI
 
 namespace polarslam {
 
@@ -37,27 +42,45 @@ class SequenceTracker {
   int64_t dropped_ = 0, restarts_ = 0;
 };
 
+/// What every processing stage is told on its command line (addProcessOptions).
+struct ProcessOptions {
+  std::string lcm_url;
+  /// Input stamped further than this from the other input is rejected (io/stream_time_gate.hpp).
+  double max_time_jump_s = 10.0;
+};
+void addProcessOptions(CLI::App& app, ProcessOptions& options);
+
+/// Whether a subscription's messages carry stream time (sensor data and what is computed from it,
+/// gated by the StreamTimeGate) or wall-clock time (requests, goals, status).
+enum class Stamps { WallClock, StreamTime };
+
 class ProcessContext {
  public:
   ProcessContext(std::string name, const std::string& lcm_url);
+  ProcessContext(std::string name, const ProcessOptions& options);
   ProcessContext(const ProcessContext&) = delete;
   ProcessContext& operator=(const ProcessContext&) = delete;
 
   lcm::LCM& lcm() { return *lcm_; }
   const std::string& name() const { return name_; }
 
-  /// Subscribes with a typed handler; messages that do not decode as MsgT are rejected and counted.
+  /// Subscribes with a typed handler; messages that do not decode as MsgT, and stream-time
+  /// messages whose stamp jumps away from the other input, are rejected and counted. Only what
+  /// passes goes into the journal, so that a restart does not replay a rejected message.
   template <typename MsgT>
-  void subscribe(const std::string& channel, std::function<void(const MsgT&)> handler) {
+  void subscribe(const std::string& channel, std::function<void(const MsgT&)> handler,
+                 Stamps stamps = Stamps::WallClock) {
     auto sub = std::make_unique<Subscription>();
     sub->context = this;
-    sub->raw = [this, handler, channel](const lcm::ReceiveBuffer* rbuf) {
-      if (journal_ && !replaying_) journal_->append(channel, rbuf->recv_utime, rbuf->data, rbuf->data_size);
+    sub->raw = [this, handler, channel, stamps](const lcm::ReceiveBuffer* rbuf) {
       MsgT msg;
       if (!decodeLcm(msg, rbuf->data, rbuf->data_size)) {
         reject(channel + ": message does not decode as " + MsgT::getTypeName());
         return;
       }
+      if (stamps == Stamps::StreamTime)
+        if (const std::string why = time_gate_.admit(channel, msg.utime); !why.empty()) return reject(why);
+      if (journal_ && !replaying_) journal_->append(channel, rbuf->recv_utime, rbuf->data, rbuf->data_size);
       handler(msg);
     };
     lcm::Subscription* s = lcm_->subscribe(channel, &Subscription::onMessage, sub.get());
@@ -66,17 +89,20 @@ class ProcessContext {
     subscriptions_.push_back(std::move(sub));
   }
 
-  /// The usual input path: decode as MsgT, convert to the core type ValueT (a conversion that
-  /// fails is rejected with its reason), check the sequence number, then call `handler`, which
-  /// counts the message handled (or rejects it) itself.
+  /// The usual input path for stream data: decode as MsgT, gate its time stamp, convert to the
+  /// core type ValueT (a conversion that fails is rejected with its reason), check the sequence
+  /// number, then call `handler`, which counts the message handled (or rejects it) itself.
   template <typename MsgT, typename ValueT>
   void subscribeConverted(const std::string& channel, std::function<void(ValueT&)> handler) {
-    subscribe<MsgT>(channel, [this, channel, handler](const MsgT& msg) {
-      ValueT value;
-      if (const std::string why = fromLcm(msg, value); !why.empty()) return reject(why);
-      if (!checkSequence(channel, msg.seq)) return;
-      handler(value);
-    });
+    subscribe<MsgT>(
+        channel,
+        [this, channel, handler](const MsgT& msg) {
+          ValueT value;
+          if (const std::string why = fromLcm(msg, value); !why.empty()) return reject(why);
+          if (!checkSequence(channel, msg.seq)) return;
+          handler(value);
+        },
+        Stamps::StreamTime);
   }
 
   /// Nothing is published while the journal is replayed: those messages went out before.
@@ -124,6 +150,7 @@ class ProcessContext {
   int64_t handled_ = 0, rejected_ = 0;
   std::map<std::string, int64_t> reject_kinds_;
   SequenceTracker sequences_;
+  StreamTimeGate time_gate_;
   std::unique_ptr<InputJournal> journal_;
   bool replaying_ = false;
 };

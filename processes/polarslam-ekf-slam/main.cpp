@@ -20,13 +20,14 @@ using namespace polarslam;
 int main(int argc, char** argv) {
   CLI::App app{"polarslam-ekf-slam: EKF SLAM with line, corner and point features"};
   addVersionFlag(app);
-  std::string url, config;
+  std::string config;
   std::string odometry_channel = "ODOMETRY", features_channel = "FEATURES", laser_channel = "LASER",
               pose_channel = "SLAM_POSE", map_channel = "SLAM_MAP", anchors_channel = "SCAN_ANCHORS";
   double map_period = 1.0;
   app.add_option("--config", config, "robot file or estimator file (see core/pipeline/feature_slam_estimator.hpp)")
       ->check(CLI::ExistingFile);
-  app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
+  ProcessOptions process_options;
+  addProcessOptions(app, process_options);
   app.add_option("--odometry-channel", odometry_channel, "channel of the odometry (odometry_t)")->capture_default_str();
   app.add_option("--features-channel", features_channel, "channel of the feature sets (features_t)")->capture_default_str();
   app.add_option("--laser-channel", laser_channel, "scan time stamps for SCAN_ANCHORS ('' = none)")->capture_default_str();
@@ -47,7 +48,7 @@ int main(int argc, char** argv) {
 
   try {
     const FeaturePipelineConfig cfg = loadFeaturePipelineConfig(config, SlamSensors::Fused);
-    ProcessContext context("polarslam-ekf-slam", url);
+    ProcessContext context("polarslam-ekf-slam", process_options);
     context.enableJournal(journal);
     FeatureSlam slam(cfg.slam);
     int64_t pose_seq = 0, map_seq = 0, anchor_seq = 0, last_map_utime = 0;
@@ -86,7 +87,7 @@ int main(int argc, char** argv) {
         if (rejectIf(slam.requestAnchors(msg.utime))) return;
         context.handled();
         publishOutputs();
-      });
+      }, Stamps::StreamTime);
     context.run();
     slam.flush();
     publishOutputs();

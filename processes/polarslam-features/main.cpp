@@ -20,13 +20,14 @@ using namespace polarslam;
 int main(int argc, char** argv) {
   CLI::App app{"polarslam-features: laser scans to polar line and right-angle corner features"};
   addVersionFlag(app);
-  std::string url, sensors = "fused", laser_channel = "LASER", features_channel = "LASER_FEATURES",
+  std::string sensors = "fused", laser_channel = "LASER", features_channel = "LASER_FEATURES",
                    odometry_channel = "ODOMETRY", sonar_channel = "SONAR";
   LaserFeatureOptions options;
   options.add(app);
   app.add_option("--sensors", sensors, "laser | sonar | fused (fused: sonar break hints)")
       ->check(CLI::IsMember({"laser", "sonar", "fused"}))->capture_default_str();
-  app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
+  ProcessOptions process_options;
+  addProcessOptions(app, process_options);
   app.add_option("--laser-channel", laser_channel, "channel of the laser scans (laser_scan_t)")->capture_default_str();
   app.add_option("--features-channel", features_channel, "channel of the feature sets (features_t)")->capture_default_str();
   app.add_option("--odometry-channel", odometry_channel, "speed for the motion error term; \"\" = none")
@@ -42,7 +43,7 @@ int main(int argc, char** argv) {
 
   try {
     LaserFeatureStage stage(options.resolvePipeline(parseSlamSensors(sensors)));
-    ProcessContext context("polarslam-features", url);
+    ProcessContext context("polarslam-features", process_options);
     int64_t out_seq = 0;
     context.subscribeConverted<polarslam::laser_scan_t, LaserScan>(laser_channel, [&](LaserScan& scan) {
       FeatureSet features = stage.extract(scan);

@@ -19,14 +19,15 @@ using namespace polarslam;
 int main(int argc, char** argv) {
   CLI::App app{"polarslam-fusion: laser and advanced-sonar features fused into FEATURES"};
   addVersionFlag(app);
-  std::string url, config, sensors = "fused";
+  std::string config, sensors = "fused";
   std::string laser_features_channel = "LASER_FEATURES", sonar_channel = "SONAR", laser_channel = "LASER",
               odometry_channel = "ODOMETRY", out_channel = "FEATURES";
   app.add_option("--config", config, "robot file or estimator file (see core/pipeline/feature_slam_estimator.hpp)")
       ->check(CLI::ExistingFile);
   app.add_option("--sensors", sensors, "laser | sonar | fused")->check(CLI::IsMember({"laser", "sonar", "fused"}))
       ->capture_default_str();
-  app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
+  ProcessOptions process_options;
+  addProcessOptions(app, process_options);
   app.add_option("--laser-features-channel", laser_features_channel, "channel of the laser feature sets, laser frame (features_t)")->capture_default_str();
   app.add_option("--sonar-channel", sonar_channel, "channel of the advanced-sonar cycles (sonar_targets_t)")->capture_default_str();
   app.add_option("--laser-channel", laser_channel, "raw scans for laser-aided sonar selection")->capture_default_str();
@@ -43,7 +44,7 @@ int main(int argc, char** argv) {
   try {
     const SlamSensors which = parseSlamSensors(sensors);
     const FeaturePipelineConfig cfg = loadFeaturePipelineConfig(config, which);
-    ProcessContext context("polarslam-fusion", url);
+    ProcessContext context("polarslam-fusion", process_options);
     FeatureFusion fusion(cfg.fusion);
     int64_t out_seq = 0;
     auto publishReady = [&] {

@@ -320,7 +320,7 @@ int main(int argc, char** argv) {
   CLI::App app{"polarslam-grid: the live occupancy grid from EKF SLAM's anchored scans or PSM SLAM's pose graph"};
   addVersionFlag(app);
   Options o;
-  std::string url, source = "ekf", config;
+  std::string source = "ekf", config;
   app.add_option("--source", source, "ekf (SCAN_ANCHORS + SLAM_MAP) | psm-slam (PSM_SLAM_ANCHORS + PSM_SLAM_GRAPH)")
       ->check(CLI::IsMember({"ekf", "psm-slam"}))->capture_default_str();
   app.add_option("--config", config, "psm-slam: the PSM SLAM file (its grid_* keys), e.g. config/psm-slam.yaml")
@@ -342,7 +342,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--goal-tolerance", o.goal_tolerance, "m")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_flag("!--no-compress", o.compress, "GRID_MAP cells raw instead of zlib-deflated");
-  app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
+  ProcessOptions process_options;
+  addProcessOptions(app, process_options);
   addChannelOptions(app, o.channels);
   JournalOptions journal;
   addJournalOptions(app, journal);
@@ -353,7 +354,7 @@ int main(int argc, char** argv) {
     o.grid.source = ekf ? GridSource::EkfAnchors : GridSource::PsmGraph;
     if (!ekf && app.count("--pose-channel") == 0) o.channels.pose = "PSM_SLAM_POSE";
     if (!config.empty()) o.grid.psm_map = loadPsmSlamEstimatorConfig(config).map;
-    ProcessContext context(ekf ? "polarslam-grid" : "polarslam-grid-psm", url);
+    ProcessContext context(ekf ? "polarslam-grid" : "polarslam-grid-psm", process_options);
     context.enableJournal(journal);
     GridNode node(context, o);
     node.subscribe();

@@ -57,10 +57,11 @@ class GraphPublisher {
 int main(int argc, char** argv) {
   CLI::App app{"polarslam-psm-slam: SLAM with polar scan matching, loop closure and pose-graph optimisation"};
   addVersionFlag(app);
-  std::string url, config;
+  std::string config;
   double graph_period = 1.0;
   Channels channels;
-  app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
+  ProcessOptions process_options;
+  addProcessOptions(app, process_options);
   app.add_option("--config", config, "PSM SLAM parameters (YAML, e.g. config/psm-slam.yaml)")
       ->check(CLI::ExistingFile);
   app.add_option("--graph-period", graph_period, "s between PSM_SLAM_GRAPH messages at most")
@@ -82,7 +83,7 @@ int main(int argc, char** argv) {
 
   try {
     PsmSlam slam(config.empty() ? PsmSlamParams{} : loadPsmSlamEstimatorConfig(config).slam);
-    ProcessContext context("polarslam-psm-slam", url);
+    ProcessContext context("polarslam-psm-slam", process_options);
     context.enableJournal(journal);
     GraphPublisher graph(context, channels.graph, graph_period);
     int64_t pose_seq = 0, anchor_seq = 0, last_utime = 0;

@@ -42,12 +42,13 @@ polarslam::scan_match_t matchMessage(const LaserOdometryUpdate& u, MatchMethod m
 int main(int argc, char** argv) {
   CLI::App app{"polarslam-psm: laser odometry by polar scan matching (PSM)"};
   addVersionFlag(app);
-  std::string url, method = "psm", covariance = "wls";
+  std::string method = "psm", covariance = "wls";
   bool ignore_odometry = false;
   Channels channels;
   LaserOdometryParams params;
   PsmParams psm;
-  app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or multicast TTL 0)");
+  ProcessOptions process_options;
+  addProcessOptions(app, process_options);
   app.add_option("--method", method)->check(CLI::IsMember({"psm", "psm-c", "icp"}))->capture_default_str();
   app.add_option("--covariance", covariance)->check(CLI::IsMember({"wls", "heuristic"}))->capture_default_str();
   app.add_option("--decimation", psm.decimation, "use every n-th beam")->check(CLI::Range(1, 16))->capture_default_str();
@@ -64,7 +65,7 @@ int main(int argc, char** argv) {
   parseCovarianceModel(covariance, psm.covariance);
 
   try {
-    ProcessContext context("polarslam-psm", url);
+    ProcessContext context("polarslam-psm", process_options);
     LaserOdometry odometry(params, psm);
     int64_t pose_seq = 0, match_seq = 0;
     context.subscribeConverted<polarslam::laser_scan_t, LaserScan>(channels.laser, [&](LaserScan& scan) {

@@ -22,6 +22,7 @@ struct RunOptions {
   PipelineOptions pipeline_options;
   SensorChannelNames channels;
   bool print_config = false;
+  double max_time_jump_s = 10.0;
 };
 
 /// Ground truth re-expressed in the robot's starting frame, which is the map frame of every estimator.
@@ -131,7 +132,8 @@ void runPipeline(RunOptions o) {
   visitor.slam_map = [&](const FeatureMap& m) { estimator->onFeatureMap(m); };
   visitor.anchored_pose = [&](const AnchoredPose& p) { estimator->onAnchoredPose(p); };
   visitor.pose_graph = [&](const PoseGraph& g) { estimator->onPoseGraph(g); };
-  const SensorLogSummary summary = visitSensorLog(o.log, o.channels, visitor, "run " + o.pipeline);
+  const SensorLogSummary summary = visitSensorLog(o.log, o.channels, visitor, "run " + o.pipeline,
+                                                  {static_cast<int64_t>(o.max_time_jump_s * 1e6), 3});
   nlohmann::json report;
   estimator->finish(o.out, report);
   const double run_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -184,6 +186,9 @@ void setupRun(CLI::App& sub) {
       ->check(CLI::IsMember({"laser", "sonar", "fused"}))->capture_default_str();
   sub.add_option("--config", o->pipeline_options.config, "estimator parameters (YAML)")->check(CLI::ExistingFile);
   sub.add_option("-o,--out", o->out, "output folder");
+  sub.add_option("--max-time-jump", o->max_time_jump_s,
+                 "s: a message stamped further than this from the other channels is rejected and counted")
+      ->check(CLI::PositiveNumber)->capture_default_str();
   sub.add_option("--laser-channel", o->channels.laser, "channel of the laser scans (laser_scan_t)")->capture_default_str();
   sub.add_option("--sonar-channel", o->channels.sonar, "channel of the advanced-sonar cycles (sonar_targets_t)")->capture_default_str();
   sub.add_option("--odometry-channel", o->channels.odometry, "channel of the odometry (odometry_t)")->capture_default_str();

@@ -13,13 +13,15 @@ namespace {
 
 class Dispatcher {
  public:
-  explicit Dispatcher(SensorLogSummary& summary) : summary_(summary) {}
+  Dispatcher(SensorLogSummary& summary, const StreamTimeGateConfig& time_gate)
+      : summary_(summary), time_gate_(time_gate) {}
 
   template <typename MsgT, typename CoreT>
   void deliver(const LogEvent& event, const std::function<void(const CoreT&)>& sink) {
     if (!sink) return;
     MsgT msg;
     if (!event.decode(msg)) return reject(event.channel + ": message does not decode as " + MsgT::getTypeName());
+    if (const std::string why = time_gate_.admit(event.channel, msg.utime); !why.empty()) return reject(why);
     CoreT value;
     if (const std::string why = fromLcm(msg, value); !why.empty()) return reject(why);
     ++summary_.messages[event.channel];
@@ -33,6 +35,7 @@ class Dispatcher {
     if (summary_.rejected[why]++ == 0) std::cerr << "rejected: " << why << " (further ones counted)\n";
   }
   SensorLogSummary& summary_;
+  StreamTimeGate time_gate_;
 };
 
 void recordStatus(const LogEvent& event, SensorLogSummary& summary) {
@@ -44,11 +47,12 @@ void recordStatus(const LogEvent& event, SensorLogSummary& summary) {
 }  // namespace
 
 SensorLogSummary visitSensorLog(const std::string& path, const SensorChannelNames& channels,
-                                const SensorLogVisitor& visitor, const std::string& progress_label) {
+                                const SensorLogVisitor& visitor, const std::string& progress_label,
+                                const StreamTimeGateConfig& time_gate) {
   SensorLogSummary summary;
   LcmLogReader reader(path);
   ProgressBar progress(progress_label.empty() ? "read " + path : progress_label);
-  Dispatcher dispatch(summary);
+  Dispatcher dispatch(summary, time_gate);
   LogEvent event;
   long events = 0;
   while (reader.next(event)) {

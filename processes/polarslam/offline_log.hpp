@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "geometry/features.hpp"
+#include "io/stream_time_gate.hpp"
 #include "laser/laser_scan.hpp"
 #include "odometry/odometry_reading.hpp"
 #include "slam/feature_map.hpp"
@@ -49,9 +50,11 @@ struct SensorLogSummary {
 };
 
 /// Calls the visitor's functions in log order; PROCESS_STATUS goes into the summary; other
-/// channels are ignored. Messages that do
-/// not decode or validate are counted in the summary (first of each reason logged to stderr).
+/// channels are ignored. Messages that do not decode or validate, or whose stamp jumps away from
+/// the other channels' (StreamTimeGate), are counted in the summary (first of each reason logged
+/// to stderr), as the live processes count them.
 SensorLogSummary visitSensorLog(const std::string& path, const SensorChannelNames& channels,
-                                const SensorLogVisitor& visitor, const std::string& progress_label = "");
+                                const SensorLogVisitor& visitor, const std::string& progress_label = "",
+                                const StreamTimeGateConfig& time_gate = {});
 
 }  // namespace polarslam

@@ -1,5 +1,7 @@
 // ParameterTable: one description of a component's keys reads YAML (ranges, degrees, unknown keys
 // rejected with file and line), prints the effective values, and finds keys a file leaves out.
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -29,8 +31,13 @@ void describe(ParameterTable& t, Params& p) {
   t.section("inner", "a nested map").number("value", p.inner, 0.0, 5.0, "inside");
 }
 
+// One file per test process: ctest runs the tests of this file in parallel.
+std::string temporaryPath(const std::string& name) {
+  return ::testing::TempDir() + "/" + std::to_string(::getpid()) + "-" + name;
+}
+
 std::string writeFile(const std::string& name, const std::string& text) {
-  const std::string path = ::testing::TempDir() + "/" + name;
+  const std::string path = temporaryPath(name);
   std::ofstream(path) << text;
   return path;
 }
@@ -66,7 +73,7 @@ TEST(ParameterTable, ReadsNumbersDegreesWholeNumbersFlagsWordsAndSections) {
 }
 
 TEST(ParameterTable, BadValuesAreErrorsNamingFileLineAndKey) {
-  const std::string path = ::testing::TempDir() + "/parameters.yaml";
+  const std::string path = temporaryPath("parameters.yaml");
   EXPECT_NE(errorOf("distance: 1\ndistanse: 2\n").find(path + ":2: unknown key 'distanse'"), std::string::npos)
       << errorOf("distance: 1\ndistanse: 2\n");
   EXPECT_NE(errorOf("distance: 11\n").find(path + ":1: test.distance: 11 is outside"), std::string::npos);

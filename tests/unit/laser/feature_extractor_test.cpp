@@ -1,5 +1,7 @@
 // Segmentation and the LaserFeatureExtractor on analytic scans: rooms, corners, breaks, hints,
 // bad readings, any beam count and field of view.
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -310,7 +312,7 @@ TEST(FeatureExtractor, SegmentationReportsCornerCandidatesOnlyForPerpendicularNe
 }
 
 std::string writeTemporary(const std::string& name, const std::string& text) {
-  const std::string path = testing::TempDir() + "/" + name;
+  const std::string path = testing::TempDir() + "/" + std::to_string(::getpid()) + "-" + name;
   std::ofstream(path) << text;
   return path;
 }
