@@ -13,7 +13,8 @@ InputJournal::InputJournal(std::string path, std::chrono::milliseconds flush_per
 
 std::vector<LogEvent> InputJournal::recover() {
   std::vector<LogEvent> events;
-  if (std::filesystem::exists(path_)) {
+  std::error_code size_error;
+  if (std::filesystem::file_size(path_, size_error) > 0 && !size_error) {
     LcmLogReader reader(path_);
     LogEvent event;
     while (reader.next(event)) events.push_back(event);

@@ -53,6 +53,7 @@ GroundTruthLog readGroundTruth(const std::string& path, const std::string& chann
     }
   }
   progress.finish();
+  reader.printWarnings();
   if (truth.poses.empty())
     throw std::runtime_error("no valid pose_t messages on channel " + channel + " in '" + path + "'");
   return truth;

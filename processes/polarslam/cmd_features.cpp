@@ -96,6 +96,7 @@ void runFeatures(const FeaturesCommand& cmd) {
     corners += static_cast<long>(features.corners.size());
   }
   progress.finish();
+  reader.printWarnings();
   out.close();
   if (!out) throw std::runtime_error("error writing " + tmp);
   std::filesystem::rename(tmp, cmd.out);

@@ -152,6 +152,7 @@ void runPipeline(RunOptions o) {
   report["realtime_factor"] = run_seconds > 0 ? summary.durationSeconds() / run_seconds : 0.0;
   report["messages"] = summary.messages;
   report["rejected"] = summary.rejected;
+  if (!summary.log_warnings.empty()) report["log_warnings"] = summary.log_warnings;
   if (!summary.processes.empty()) {
     report["processes"] = processesJson(summary.processes);
     int64_t dropped = 0;

@@ -81,6 +81,7 @@ void setupLogInfo(CLI::App& sub) {
     LogEvent event;
     while (reader.next(event)) table.add(event.channel, event.utime, event.data.data(), event.data.size());
     table.print(std::cout);
+    reader.printWarnings();
   });
 }
 

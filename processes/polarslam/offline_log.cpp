@@ -69,6 +69,8 @@ SensorLogSummary visitSensorLog(const std::string& path, const SensorChannelName
     if (++events % 256 == 0) progress.update(reader.progress());
   }
   progress.finish();
+  reader.printWarnings();
+  summary.log_warnings = reader.warnings();
   return summary;
 }
 

@@ -45,6 +45,7 @@ struct SensorLogSummary {
   std::map<std::string, long> messages;  ///< per channel, accepted
   std::map<std::string, long> rejected;  ///< per reason
   std::map<std::string, ProcessCounts> processes;  ///< PROCESS_STATUS by process name (live recordings)
+  std::vector<std::string> log_warnings;  ///< a truncated or corrupt log, with byte offsets
   int64_t first_utime = 0, last_utime = 0;
   double durationSeconds() const { return static_cast<double>(last_utime - first_utime) * 1e-6; }
 };
