@@ -1,5 +1,7 @@
 #include "common/foxglove_messages.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
 
 #include "geometry/chi_squared.hpp"

@@ -76,6 +76,7 @@ TEST(FoxgloveProtocol, BadRequestsGetAnErrorStatusAndAReason) {
   session.onText(R"({"op":"subscribe","subscriptions":[{"id":1,"channelId":1}]})");
   const std::vector<std::string> bad = {
       "not json",
+      R"({"op":"subscribe","subscriptions":[{"id":1e999,"channelId":1}]})",
       "[1,2]",
       R"({"noop":1})",
       R"({"op":"getParameters","parameterNames":[]})",
@@ -116,6 +117,7 @@ TEST(FoxgloveProtocol, ClientsPublishOnlyOnAllowedTopicsAfterAdvertising) {
   EXPECT_EQ(out.publications[0].topic, "GOAL");
   EXPECT_EQ(out.publications[0].payload["y"], 2);
   EXPECT_EQ(session.onBinary(clientData(5, "{broken")).errors.size(), 1u);
+  EXPECT_EQ(session.onBinary(clientData(5, R"({"x":1e999,"y":0})")).errors.size(), 1u);  // overflows a double
   EXPECT_TRUE(session.onText(R"({"op":"unadvertise","channelIds":[5]})").errors.empty());
   EXPECT_EQ(session.onBinary(clientData(5, R"({"x":1,"y":2})")).errors.size(), 1u);
 }
