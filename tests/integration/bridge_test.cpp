@@ -181,6 +181,7 @@ int runNodeWhilePublishing(lcm::LCM& lcm, const std::vector<std::string>& node_a
   const size_t line = text.rfind("{\"ok\"");
   summary = nlohmann::json::parse(line == std::string::npos ? "{}" : text.substr(line, text.find('\n', line) - line),
                                   nullptr, false);
+  std::cout << node_args[1] << ": " << summary.dump() << "\n";
   return node.exitCode();
 }
 
