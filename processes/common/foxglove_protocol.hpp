@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <cstddef>
 #include <deque>
 #include <map>
 #include <optional>
@@ -81,33 +82,39 @@ class ClientSession {
   std::map<uint32_t, std::string> client_topics_;  ///< client channel id → topic
 };
 
-/// A FIFO that keeps at most `capacity` items: pushing onto a full queue drops the oldest.
-template <typename T>
-class DropOldestQueue {
+/// The frames waiting for one client: at most `capacity` frames and `max_bytes` bytes; pushing
+/// beyond either drops the oldest (but never the frame just pushed).
+class FrameQueue {
  public:
-  explicit DropOldestQueue(size_t capacity) : capacity_(capacity == 0 ? 1 : capacity) {}
-  /// Returns true when an old item had to be dropped to make room.
-  bool push(T item) {
-    const bool full = items_.size() >= capacity_;
-    if (full) {
-      items_.pop_front();
-      ++dropped_;
+  explicit FrameQueue(size_t capacity, size_t max_bytes = SIZE_MAX)
+      : capacity_(capacity == 0 ? 1 : capacity), max_bytes_(max_bytes) {}
+  /// Returns how many old frames were dropped to make room.
+  size_t push(std::string frame) {
+    bytes_ += frame.size();
+    frames_.push_back(std::move(frame));
+    size_t dropped = 0;
+    while (frames_.size() > 1 && (frames_.size() > capacity_ || bytes_ > max_bytes_)) {
+      bytes_ -= frames_.front().size();
+      frames_.pop_front();
+      ++dropped;
     }
-    items_.push_back(std::move(item));
-    return full;
+    dropped_ += dropped;
+    return dropped;
   }
-  bool empty() const { return items_.empty(); }
-  size_t size() const { return items_.size(); }
-  T pop() {
-    T item = std::move(items_.front());
-    items_.pop_front();
-    return item;
+  bool empty() const { return frames_.empty(); }
+  size_t size() const { return frames_.size(); }
+  size_t bytes() const { return bytes_; }
+  std::string pop() {
+    std::string frame = std::move(frames_.front());
+    frames_.pop_front();
+    bytes_ -= frame.size();
+    return frame;
   }
   uint64_t dropped() const { return dropped_; }
 
  private:
-  size_t capacity_;
-  std::deque<T> items_;
+  size_t capacity_, max_bytes_, bytes_ = 0;
+  std::deque<std::string> frames_;
   uint64_t dropped_ = 0;
 };
 

@@ -57,10 +57,10 @@ std::map<std::string, PageFile> loadPage(const std::string& root) {
 
 struct BridgeServer::Impl {
   struct Client {
-    explicit Client(const foxglove::ChannelTable& channels, const std::vector<std::string>& topics, size_t capacity)
-        : session(channels, topics), queue(capacity) {}
+    Client(const foxglove::ChannelTable& channels, const ServerOptions& options)
+        : session(channels, options.publish_topics), queue(options.queue_capacity, options.queue_bytes) {}
     foxglove::ClientSession session;
-    foxglove::DropOldestQueue<std::string> queue;
+    foxglove::FrameQueue queue;
     std::string address;
   };
 
@@ -113,7 +113,7 @@ struct BridgeServer::Impl {
 
   void onOpen(Handle hdl) {
     Server::connection_ptr con = server.get_con_from_hdl(hdl);
-    auto [it, inserted] = clients.try_emplace(hdl, channels, options.publish_topics, options.queue_capacity);
+    auto [it, inserted] = clients.try_emplace(hdl, channels, options);
     it->second.address = con->get_remote_endpoint();
     client_count = clients.size();
     sendText(hdl, foxglove::serverInfoMessage(options.name, capabilities(), options.metadata));
@@ -175,7 +175,7 @@ struct BridgeServer::Impl {
     for (auto& [hdl, client] : clients) {
       const std::optional<uint32_t> subscription = client.session.subscriptionFor(channel_id);
       if (!subscription) continue;
-      dropped += client.queue.push(foxglove::messageDataFrame(*subscription, receive_time_ns, *payload)) ? 1 : 0;
+      dropped += client.queue.push(foxglove::messageDataFrame(*subscription, receive_time_ns, *payload));
       flush(hdl, client);
     }
     if (dropped == 0) return;

@@ -21,6 +21,7 @@ struct ServerOptions {
   std::string web_root;                     ///< folder of the page (index.html, …); "" = no page
   std::vector<std::string> publish_topics;  ///< topics clients may publish on ("" list = read-only)
   size_t queue_capacity = 64;               ///< messages waiting per client before the oldest is dropped
+  size_t queue_bytes = 16 * 1024 * 1024;    ///< … and bytes
   size_t max_clients = 64;
   std::string name = "polarslam-bridge";
   std::map<std::string, std::string> metadata;  ///< serverInfo metadata (the page reads its topic names there)

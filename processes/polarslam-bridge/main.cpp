@@ -109,14 +109,19 @@ class Bridge {
     table_.add(topic, schema);
   }
 
-  void send(const std::string& topic, const Json& message) {
+  static uint64_t nowNanoseconds() { return static_cast<uint64_t>(nowUtime()) * 1000u; }
+
+  /// `received_ns`: when the LCM message arrived (the receive time clients see; latency is measured from it).
+  void send(const std::string& topic, const Json& message, uint64_t received_ns = nowNanoseconds()) {
     context_.handled();
-    server_->broadcast(*table_.find(topic), static_cast<uint64_t>(nowUtime()) * 1000u, message.dump());
+    server_->broadcast(*table_.find(topic), received_ns, message.dump());
   }
 
   void onLaser(const LaserScan& scan) {
-    send(kTransformTopic, foxglove::frameTransform(scan.laser_pose, scan.utime, foxglove::kBaseFrame, foxglove::kLaserFrame));
-    send(o_.channels.laser, foxglove::laserScan(scan));
+    const uint64_t received = nowNanoseconds();
+    send(kTransformTopic, foxglove::frameTransform(scan.laser_pose, scan.utime, foxglove::kBaseFrame, foxglove::kLaserFrame),
+         received);
+    send(o_.channels.laser, foxglove::laserScan(scan), received);
   }
 
   void onOdometry(const OdometryReading& odometry) {
@@ -239,6 +244,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--queue", o.server.queue_capacity, "messages queued per client before the oldest is dropped")
       ->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--queue-bytes", o.server.queue_bytes, "bytes queued per client before the oldest message is dropped")
+      ->check(CLI::Range(size_t{1024}, size_t{1} << 32))->capture_default_str();
   app.add_option("--max-clients", o.server.max_clients, "connections served at once")->check(CLI::Range(1, 10000))
       ->capture_default_str();
   app.add_option("--trajectory-period", o.trajectory_period, "s between trajectory messages")

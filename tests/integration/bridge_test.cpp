@@ -12,6 +12,8 @@
 #include <sys/socket.h>
 
 #include <filesystem>
+#include <functional>
+#include <map>
 
 #include "child_process.hpp"
 #include "common/lcm_convert.hpp"
@@ -154,11 +156,13 @@ class FakePipeline {
 
 struct StatusWatch {
   int64_t bridge_rejected = -1;
+  std::map<std::string, int64_t> bridge_reject_kinds;
   std::vector<polarslam::goal_t> goals;
   void onStatus(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     polarslam::process_status_t msg;
-    if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) >= 0 && msg.name == "polarslam-bridge")
-      bridge_rejected = msg.messages_rejected;
+    if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0 || msg.name != "polarslam-bridge") return;
+    bridge_rejected = msg.messages_rejected;
+    for (int i = 0; i < msg.num_reject_kinds; ++i) bridge_reject_kinds[msg.reject_kinds[i]] = msg.reject_counts[i];
   }
   void onGoal(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     polarslam::goal_t msg;
@@ -166,14 +170,17 @@ struct StatusWatch {
   }
 };
 
-/// Runs `node script args…` while feeding the bridge; returns node's exit code and its summary.
+/// Runs `node script args…` while feeding the bridge (each round also calls `extra`); returns
+/// node's exit code and its summary.
 int runNodeWhilePublishing(lcm::LCM& lcm, const std::vector<std::string>& node_args, const fs::path& out,
-                           nlohmann::json& summary, std::chrono::seconds limit = 90s) {
+                           nlohmann::json& summary, std::chrono::seconds limit = 90s,
+                           const std::function<void(int64_t)>& extra = {}) {
   ChildProcess node(node_args, out.string());
   FakePipeline pipeline(lcm);
   const auto end = std::chrono::steady_clock::now() + limit;
-  while (node.running() && std::chrono::steady_clock::now() < end) {
+  for (int64_t round = 0; node.running() && std::chrono::steady_clock::now() < end; ++round) {
     pipeline.publishRound();
+    if (extra) extra(round);
     lcm.handleTimeout(100);
   }
   if (!node.waitFor(1s)) return -1;
@@ -247,6 +254,45 @@ TEST(Bridge, ThePageDrawsTheMapAndAClickPublishesAGoal) {
   EXPECT_NEAR(watch.goals[0].x, 3.0, 0.1);
   EXPECT_NEAR(watch.goals[0].y, 4.0, 0.1);
   EXPECT_TRUE(std::isnan(watch.goals[0].theta));
+  fs::remove_all(dir);
+}
+
+// A client that stops reading must cost only its own messages: its queue drops the oldest
+// (counted in PROCESS_STATUS) while LCM handling and the other clients carry on.
+TEST(Bridge, AStalledClientLosesItsOwnMessagesOnlyAndTheDropsAreCounted) {
+  if (const std::string why = nodeUnavailable(); !why.empty()) GTEST_SKIP() << why;
+  const fs::path dir = fs::temp_directory_path() / ("bridge_slow_test_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  lcm::LCM lcm(resolveLcmUrl(""));
+  ASSERT_TRUE(lcm.good());
+  StatusWatch watch;
+  lcm.subscribe("PROCESS_STATUS", &StatusWatch::onStatus, &watch);
+  const uint16_t port = 18768;
+  auto bridge = startBridge(port, dir / "bridge.log");
+  ASSERT_TRUE(acceptsConnections(port));
+  // 800 × 800 cells of noise (zlib cannot shrink it): about 850 kB of JSON per message.
+  GridSlice big;
+  big.resolution = 0.05;
+  big.width = big.height = 800;
+  uint32_t noise = 12345;
+  for (int i = 0; i < big.width * big.height; ++i) {
+    noise = noise * 1664525u + 1013904223u;
+    big.probability.push_back(static_cast<float>(noise >> 25) / 128.0f);
+  }
+  nlohmann::json summary;
+  const int code = runNodeWhilePublishing(
+      lcm, {"node", sourcePath("tests/web/slow_client.mjs"), "--url", "ws://127.0.0.1:" + std::to_string(port), "--seconds", "8"},
+      dir / "node.log", summary, 60s, [&](int64_t round) {
+        polarslam::grid_map_t grid = toLcmGridMap(big, nowUtime(), 1000 + round, "ekf-anchors", 1, true);
+        lcm.publish("PSM_GRID_MAP", &grid);
+      });
+  ASSERT_EQ(code, 0) << readFile(dir / "node.log");
+  EXPECT_GT(summary.value("laserAfterStall", 0), 10) << summary.dump();
+  EXPECT_TRUE(bridge->running()) << readFile(dir / "bridge.log");
+  const std::string kind = "websocket: slow client, oldest queued message dropped";
+  const auto end = std::chrono::steady_clock::now() + 5s;
+  while (watch.bridge_reject_kinds[kind] == 0 && std::chrono::steady_clock::now() < end) lcm.handleTimeout(100);
+  EXPECT_GT(watch.bridge_reject_kinds[kind], 0) << readFile(dir / "bridge.log");
   fs::remove_all(dir);
 }
 

@@ -122,17 +122,29 @@ TEST(FoxgloveProtocol, ClientsPublishOnlyOnAllowedTopicsAfterAdvertising) {
   EXPECT_EQ(session.onBinary(clientData(5, R"({"x":1,"y":2})")).errors.size(), 1u);
 }
 
-TEST(DropOldestQueue, KeepsTheNewestAndCountsTheDropped) {
-  DropOldestQueue<int> queue(3);
-  int dropped = 0;
-  for (int i = 1; i <= 5; ++i) dropped += queue.push(i) ? 1 : 0;
-  EXPECT_EQ(dropped, 2);
+TEST(FrameQueue, KeepsTheNewestAndCountsTheDropped) {
+  FrameQueue queue(3);
+  size_t dropped = 0;
+  for (const char* frame : {"1", "2", "3", "4", "5"}) dropped += queue.push(frame);
+  EXPECT_EQ(dropped, 2u);
   EXPECT_EQ(queue.dropped(), 2u);
   ASSERT_EQ(queue.size(), 3u);
-  EXPECT_EQ(queue.pop(), 3);
-  EXPECT_EQ(queue.pop(), 4);
-  EXPECT_EQ(queue.pop(), 5);
+  EXPECT_EQ(queue.pop(), "3");
+  EXPECT_EQ(queue.pop(), "4");
+  EXPECT_EQ(queue.pop(), "5");
   EXPECT_TRUE(queue.empty());
+  EXPECT_EQ(queue.bytes(), 0u);
+}
+
+TEST(FrameQueue, ABytesBudgetDropsOldFramesButKeepsTheNewOne) {
+  FrameQueue queue(100, 10);
+  EXPECT_EQ(queue.push("aaaa"), 0u);
+  EXPECT_EQ(queue.push("bbbb"), 0u);
+  EXPECT_EQ(queue.push("cccc"), 1u);  // 12 bytes > 10: "aaaa" goes
+  EXPECT_EQ(queue.bytes(), 8u);
+  EXPECT_EQ(queue.push(std::string(50, 'x')), 2u);  // too big on its own, still delivered
+  ASSERT_EQ(queue.size(), 1u);
+  EXPECT_EQ(queue.pop().size(), 50u);
 }
 
 }  // namespace
