@@ -3,6 +3,7 @@
 #   share/polarslam/config/  robots, worlds, process groups, parameter files (found by the
 #                            programs from their own folder: processes/common/program_info)
 #   share/polarslam/logs/    the simulated default log
+#   share/polarslam/web/     polarslam-bridge's built-in map page (found like config/: program_info)
 #   share/polarslam/java/    the type jar for lcm-spy
 #   share/doc/polarslam/     README, LICENSE, docs/
 include(GNUInstallDirs)
@@ -12,6 +13,7 @@ get_property(polarslam_programs GLOBAL PROPERTY POLARSLAM_PROGRAMS)
 install(TARGETS ${polarslam_programs} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(PROGRAMS ${CMAKE_SOURCE_DIR}/scripts/lcm-spy DESTINATION ${CMAKE_INSTALL_BINDIR} RENAME polarslam-lcm-spy)
 install(DIRECTORY ${CMAKE_SOURCE_DIR}/config/ DESTINATION ${polarslam_share}/config)
+install(DIRECTORY ${CMAKE_SOURCE_DIR}/processes/polarslam-bridge/web/ DESTINATION ${polarslam_share}/web)
 install(FILES ${CMAKE_SOURCE_DIR}/logs/office.lcmlog ${CMAKE_SOURCE_DIR}/logs/README.md
         DESTINATION ${polarslam_share}/logs)
 if(POLARSLAM_JAR)

@@ -17,7 +17,10 @@
 #include "polarslam/features_t.hpp"
 #include "polarslam/grid_map_t.hpp"
 #include "polarslam/laser_scan_t.hpp"
+#include "polarslam/path_t.hpp"
+#include "polarslam/pose_graph_t.hpp"
 #include "polarslam/pose_t.hpp"
+#include "polarslam/process_status_t.hpp"
 #include "polarslam/sonar_targets_t.hpp"
 
 namespace polarslam {
@@ -90,6 +93,39 @@ inline bool arrayCountsFit(const grid_map_t&, const uint8_t* data, size_t size) 
   if (!skipString(data, size, pos)) return false;
   pos += 8 + 3 * 8 + 4 + 4 + 1 + 4;  // resolution origin[3] width height encoding scans
   return skipString(data, size, pos) && skipArray(data, size, pos, 1);
+}
+
+inline bool arrayCountsFit(const path_t&, const uint8_t* data, size_t size) {
+  using namespace lcm_decode_detail;
+  size_t pos = kHashBytes + 2 * 8;  // utime seq, then the frame string
+  if (!skipString(data, size, pos)) return false;
+  pos += 8 + 1;  // goal_utime goal_exact
+  return skipArray(data, size, pos, 8 + 8 + 8 + 8 + 1);  // pose_utime x y theta source, per pose
+}
+
+inline bool arrayCountsFit(const pose_graph_t&, const uint8_t* data, size_t size) {
+  using namespace lcm_decode_detail;
+  size_t pos = kHashBytes + 2 * 8;  // utime seq, then the frame string
+  if (!skipString(data, size, pos)) return false;
+  return skipArray(data, size, pos, 8 + 8 + 3 * 8) &&                 // node id, utime, pose[3]
+         skipArray(data, size, pos, 8 + 8 + 1 + 1 + 3 * 8 + 9 * 8);  // edge from, to, kind, active, measurement, cov
+}
+
+inline bool arrayCountsFit(const process_status_t&, const uint8_t* data, size_t size) {
+  using namespace lcm_decode_detail;
+  size_t pos = kHashBytes + 8;  // utime, then name and host
+  if (!skipString(data, size, pos) || !skipString(data, size, pos)) return false;
+  pos += 4;  // pid
+  if (!skipString(data, size, pos)) return false;  // state
+  pos += 4 + 3 * 8;  // restarts, handled, rejected, dropped
+  const size_t count_at = pos;
+  if (!skipArray(data, size, pos, 5)) return false;  // a negative count, or more kinds than 5-byte strings fit
+  pos = count_at + 4;
+  const size_t count = (size_t{data[count_at]} << 24) | (size_t{data[count_at + 1]} << 16) |
+                       (size_t{data[count_at + 2]} << 8) | size_t{data[count_at + 3]};
+  for (size_t i = 0; i < count; ++i)
+    if (!skipString(data, size, pos)) return false;
+  return pos <= size && (size - pos) / 8 >= count;  // reject_counts
 }
 
 /// Decodes `size` bytes at `data` into `msg`; false when they are not a valid MsgT.

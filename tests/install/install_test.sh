@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Install.IntoAPrefixAndRunFromAnotherFolder: `cmake --install` into a temporary prefix, then the
 # installed programs run from an unrelated folder and find their installed data (default world,
-# robot, parameter files, groups): simulate, run, --print-config, a launcher listing.
+# robot, parameter files, groups, the bridge's page): simulate, run, --print-config, a launcher listing.
 set -euo pipefail
 build=$1
 prefix=$(mktemp -d)
@@ -16,6 +16,9 @@ contains "$("$prefix/bin/polarslam" simulate --seconds 20 -o sim.lcmlog)" "$pref
 test -s ekf/report.json && test -s ekf/trajectory.tum && test -s ekf/map.pgm
 contains "$("$prefix/bin/polarslam" run --pipeline psm-slam --print-config)" "keyframe_angle_deg"
 contains "$("$prefix/bin/polarslam-launch" "$prefix/share/polarslam/config/groups/replay.yaml" --list)" polarslam-psm-slam
+# The bridge's page is installed with it and found from the installed program.
+test -s "$prefix/share/polarslam/web/index.html" && test -s "$prefix/share/polarslam/web/app.js"
+contains "$("$prefix/bin/polarslam-bridge" --help)" "$prefix/share/polarslam/web"
 test -s "$prefix/share/polarslam/java/polarslam_lcmtypes.jar"
 test -x "$prefix/bin/polarslam-lcm-spy"
 echo "installed into $prefix; ran from $work"

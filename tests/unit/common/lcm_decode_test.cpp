@@ -10,6 +10,9 @@
 #include "common/lcm_log.hpp"
 #include "polarslam/features_t.hpp"
 #include "polarslam/laser_scan_t.hpp"
+#include "polarslam/path_t.hpp"
+#include "polarslam/pose_graph_t.hpp"
+#include "polarslam/process_status_t.hpp"
 #include "polarslam/pose_t.hpp"
 #include "polarslam/sonar_targets_t.hpp"
 
@@ -117,6 +120,61 @@ TEST(LcmDecode, SonarAndFeatureCountsAreChecked) {
   ASSERT_EQ(getCount(fbuf, points_at), 2u);
   putCount(fbuf, points_at, 0x7ffffff0u);
   EXPECT_FALSE(decodeLcm(fout, fbuf.data(), fbuf.size()));
+}
+
+// The types polarslam-bridge reads besides the sensor ones: a count that claims more than the
+// bytes hold is refused before lcm-gen's decode() allocates for it.
+TEST(LcmDecode, PathGraphAndStatusCountsAreCheckedAgainstTheirBytes) {
+  path_t path{};
+  path.frame = "map";
+  path.num_poses = 2;
+  path.pose_utime = {1, 2};
+  path.x = {0.0, 1.0};
+  path.y = {0.0, 2.0};
+  path.theta = {0.0, 0.0};
+  path.source = {3, 3};
+  std::vector<uint8_t> pbuf = encode(path);
+  path_t pout{};
+  ASSERT_TRUE(decodeLcm(pout, pbuf.data(), pbuf.size()));
+  EXPECT_EQ(pout.y.at(1), 2.0);
+  const size_t poses_at = 8 + 16 + 4 + 4 + 8 + 1;  // hash utime seq "map" goal_utime goal_exact
+  ASSERT_EQ(getCount(pbuf, poses_at), 2u);
+  putCount(pbuf, poses_at, 0x7ffffff0u);
+  EXPECT_FALSE(decodeLcm(pout, pbuf.data(), pbuf.size()));
+
+  pose_graph_t graph{};
+  graph.frame = "map";
+  graph.num_nodes = 1;
+  graph.node_id = {7};
+  graph.node_utime = {8};
+  graph.node_pose = {{1.0, 2.0, 3.0}};
+  std::vector<uint8_t> gbuf = encode(graph);
+  pose_graph_t gout{};
+  ASSERT_TRUE(decodeLcm(gout, gbuf.data(), gbuf.size()));
+  EXPECT_EQ(gout.node_pose.at(0)[2], 3.0);
+  const size_t edges_at = 8 + 16 + 4 + 4 + 4 + 40;  // … "map", num_nodes, one node
+  ASSERT_EQ(getCount(gbuf, edges_at), 0u);
+  putCount(gbuf, edges_at, 1000u);
+  EXPECT_FALSE(decodeLcm(gout, gbuf.data(), gbuf.size()));
+
+  process_status_t status{};
+  status.name = "a";
+  status.host = "b";
+  status.state = "running";
+  status.num_reject_kinds = 1;
+  status.reject_kinds = {"laser: NaN range"};
+  status.reject_counts = {5};
+  std::vector<uint8_t> sbuf = encode(status);
+  process_status_t sout{};
+  ASSERT_TRUE(decodeLcm(sout, sbuf.data(), sbuf.size()));
+  EXPECT_EQ(sout.reject_kinds.at(0), "laser: NaN range");
+  EXPECT_EQ(sout.reject_counts.at(0), 5);
+  const size_t kinds_at = 8 + 8 + 6 + 6 + 4 + 12 + 4 + 24;  // hash utime name host pid state restarts counters
+  ASSERT_EQ(getCount(sbuf, kinds_at), 1u);
+  for (const uint32_t count : {2u, 0x7fffffffu, 0x80000000u}) {
+    putCount(sbuf, kinds_at, count);
+    EXPECT_FALSE(decodeLcm(sout, sbuf.data(), sbuf.size())) << count;
+  }
 }
 
 }  // namespace

@@ -186,9 +186,9 @@ TEST(GroupFile, ShippedGroupFilesLoad) {
 
   const GroupSpec pipeline = loadGroupFile(groups + "pipeline.yaml", {});
   const auto commands = selectCommands(pipeline, "", "");
-  ASSERT_EQ(commands.size(), 8u);
+  ASSERT_EQ(commands.size(), 9u);
   for (const std::string program : {"polarslam-sim", "polarslam-features", "polarslam-fusion", "polarslam-ekf-slam",
-                                    "polarslam-psm", "polarslam-psm-slam", "polarslam-grid"}) {
+                                    "polarslam-psm", "polarslam-psm-slam", "polarslam-grid", "polarslam-bridge"}) {
     // The program is argv[0], or the word after 'exec ' in a shell line.
     const auto runs = [&](const CommandSpec& c) {
       return c.argv[0] == program || (c.argv[0] == "/bin/sh" && c.argv[2].rfind("exec " + program + " ", 0) == 0);
@@ -198,7 +198,7 @@ TEST(GroupFile, ShippedGroupFilesLoad) {
   }
   // The simulator starts last so that no consumer misses its first messages.
   EXPECT_EQ(selectCommands(pipeline, "", "").back().argv[0], "polarslam-sim");
-  EXPECT_EQ(selectCommands(pipeline, "", "robot").size() + selectCommands(pipeline, "", "base").size(), 8u);
+  EXPECT_EQ(selectCommands(pipeline, "", "robot").size() + selectCommands(pipeline, "", "base").size(), 9u);
 }
 
 // Consumers start before the stages feeding them, so that none misses the first messages; the
@@ -211,9 +211,10 @@ TEST(GroupFile, ShippedGroupsStartConsumersFirstSoTheyStopLast) {
     return names;
   };
   EXPECT_EQ(namesInStartOrder("pipeline.yaml"),
-            (std::vector<std::string>{"grid", "grid-psm", "ekf-slam", "psm", "psm-slam", "fusion", "features", "sim"}));
+            (std::vector<std::string>{"bridge", "grid", "grid-psm", "ekf-slam", "psm", "psm-slam", "fusion", "features", "sim"}));
   EXPECT_EQ(namesInStartOrder("replay.yaml"),
-            (std::vector<std::string>{"recorder", "grid", "grid-psm", "ekf-slam", "psm-slam", "fusion", "features", "player"}));
+            (std::vector<std::string>{"recorder", "bridge", "grid", "grid-psm", "ekf-slam", "psm-slam", "fusion", "features",
+                                      "player"}));
 }
 
 TEST(GroupFile, ExpandsVariables) {
