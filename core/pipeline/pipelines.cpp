@@ -17,8 +17,10 @@ const std::map<std::string, PipelineFactory>& pipelines() {
        }},
       {"psm-slam",
        [](const PipelineOptions& o) -> std::unique_ptr<Estimator> {
-         return std::make_unique<PsmSlamEstimator>(o.config.empty() ? PsmSlamEstimatorConfig{}
-                                                                    : loadPsmSlamEstimatorConfig(o.config));
+         auto estimator = std::make_unique<PsmSlamEstimator>(
+             o.config.empty() ? PsmSlamEstimatorConfig{} : loadPsmSlamEstimatorConfig(o.config));
+         estimator->saveMapTo(o.save_map);
+         return estimator;
        }},
   };
   return factories;

@@ -112,6 +112,8 @@ void runPipeline(RunOptions o) {
   if ((o.pipeline == "recorded") != !o.channels.estimated_pose.empty())
     throw std::runtime_error("--pose-channel goes with --pipeline recorded, and only with it");
   const std::string label = o.pipeline == "recorded" ? o.channels.estimated_pose + " (recorded)" : o.pipeline;
+  if (!o.pipeline_options.save_map.empty() && o.pipeline != "psm-slam")
+    throw std::runtime_error("--save-map goes with --pipeline psm-slam");
   if (o.pipeline == "recorded") addRecordedChannels(o.channels);
   std::filesystem::create_directories(o.out);
   std::unique_ptr<Estimator> estimator = factory->second(o.pipeline_options);
@@ -186,6 +188,9 @@ void setupRun(CLI::App& sub) {
       ->check(CLI::IsMember({"laser", "sonar", "fused"}))->capture_default_str();
   sub.add_option("--config", o->pipeline_options.config, "estimator parameters (YAML)")->check(CLI::ExistingFile);
   sub.add_option("-o,--out", o->out, "output folder");
+  sub.add_option("--save-map", o->pipeline_options.save_map,
+                 "with --pipeline psm-slam: save the map (pose graph, reference scans, grid, parameters) to this "
+                 "folder, replacing an older map there only once the new one is complete");
   sub.add_option("--max-time-jump", o->max_time_jump_s,
                  "s: a message stamped further than this from the other channels is rejected and counted")
       ->check(CLI::PositiveNumber)->capture_default_str();
