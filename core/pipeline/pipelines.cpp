@@ -17,10 +17,8 @@ const std::map<std::string, PipelineFactory>& pipelines() {
        }},
       {"psm-slam",
        [](const PipelineOptions& o) -> std::unique_ptr<Estimator> {
-         auto estimator = std::make_unique<PsmSlamEstimator>(
-             o.config.empty() ? PsmSlamEstimatorConfig{} : loadPsmSlamEstimatorConfig(o.config));
-         estimator->saveMapTo(o.save_map);
-         return estimator;
+         return std::make_unique<PsmSlamEstimator>(o.config.empty() ? PsmSlamEstimatorConfig{}
+                                                                    : loadPsmSlamEstimatorConfig(o.config));
        }},
   };
   return factories;

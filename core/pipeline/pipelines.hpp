@@ -12,7 +12,6 @@ namespace polarslam {
 struct PipelineOptions {
   std::string sensors = "fused";  ///< laser | sonar | fused (feature SLAM)
   std::string config;             ///< optional YAML with estimator parameters
-  std::string save_map;           ///< psm-slam: folder to save the map to at the end (map_store.hpp)
 };
 
 using PipelineFactory = std::function<std::unique_ptr<Estimator>(const PipelineOptions&)>;
