@@ -114,7 +114,10 @@ void PsmSlamEstimator::finish(const std::string& out_dir, nlohmann::json& report
   nlohmann::json section = psmSlamReportJson(slam_, summary);
   section["slam_seconds"] = slam_seconds_;
   report["psm_slam"] = section;
-  if (out_dir.empty()) return;
+  if (out_dir.empty()) {
+    if (!save_map_dir_.empty()) saveStoredMap(nullptr, report);
+    return;
+  }
   writeMap(out_dir, report);
   writeG2o((std::filesystem::path(out_dir) / "graph.g2o").string(), slam_.graph());
 }
@@ -122,6 +125,7 @@ void PsmSlamEstimator::finish(const std::string& out_dir, nlohmann::json& report
 void PsmSlamEstimator::writeMap(const std::string& out_dir, nlohmann::json& report) {
   if (map_scans_.size() == 0) {
     report["grid"] = {{"written", false}, {"reason", "no usable scans"}};
+    if (!save_map_dir_.empty()) saveStoredMap(nullptr, report);
     return;
   }
   const auto start = std::chrono::steady_clock::now();
@@ -140,6 +144,25 @@ void PsmSlamEstimator::writeMap(const std::string& out_dir, nlohmann::json& repo
                     {"build_seconds", grid.build_seconds},
                     {"files", {files.ot, files.bt, files.pgm, files.yaml, files.png}},
                     {"seconds", secondsSince(start)}};
+  if (!save_map_dir_.empty()) saveStoredMap(&grid.grid, report);
+}
+
+StoredMap PsmSlamEstimator::storedMap() const {
+  PsmSlamEstimatorConfig config = config_;
+  ParameterTable table;
+  describePsmSlamEstimatorConfig(table, config);
+  return storedMapOf(slam_.graph(), map_scans_.scans(), map_scans_.anchors(), table.yaml());
+}
+
+void PsmSlamEstimator::saveStoredMap(const OccupancyGrid* grid, nlohmann::json& report) const {
+  const auto start = std::chrono::steady_clock::now();
+  const StoredMap map = storedMap();
+  saveMap(save_map_dir_, map, grid);
+  report["saved_map"] = {{"folder", save_map_dir_},
+                         {"nodes", map.graph.nodes().size()},
+                         {"edges", map.graph.edges().size()},
+                         {"reference_scans", map.scans.size()},
+                         {"seconds", secondsSince(start)}};
 }
 
 }  // namespace polarslam

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "grid/graph_scan_store.hpp"
+#include "map/map_store.hpp"
 #include "pipeline/estimator.hpp"
 #include "slam/psm_slam.hpp"
 
@@ -50,8 +51,13 @@ class PsmSlamEstimator : public Estimator {
   /// Final trajectory after finish(), the online one before.
   const std::vector<PoseStamped>& trajectory() const override { return finished_ ? final_ : online_; }
   const std::vector<PoseStamped>& onlineTrajectory() const override { return online_; }
-  /// Optimises, writes the grid files, adds "psm_slam" and "grid" figures to the report.
+  /// Optimises, writes the grid files, adds "psm_slam" and "grid" figures to the report, and
+  /// saves the map when saveMapTo() named a folder.
   void finish(const std::string& out_dir, nlohmann::json& report) override;
+  /// Where finish() saves the map (core/map/map_store.hpp); empty: nowhere.
+  void saveMapTo(std::string dir) { save_map_dir_ = std::move(dir); }
+  /// The map of everything so far (graph as it is now), with the effective parameters.
+  StoredMap storedMap() const;
 
   const PsmSlam& slam() const { return slam_; }
   /// Seconds spent inside the SLAM calls (odometry and scans), without log reading or maps.
@@ -59,6 +65,7 @@ class PsmSlamEstimator : public Estimator {
 
  private:
   void writeMap(const std::string& out_dir, nlohmann::json& report);
+  void saveStoredMap(const OccupancyGrid* grid, nlohmann::json& report) const;
 
   PsmSlamEstimatorConfig config_;
   PsmSlam slam_;
@@ -67,6 +74,7 @@ class PsmSlamEstimator : public Estimator {
   bool finished_ = false;
   GraphScanStore map_scans_;           ///< the scans the map is built from
   double slam_seconds_ = 0.0;
+  std::string save_map_dir_;
 };
 
 /// Report figures of a run: counts, optimisation, graph size.

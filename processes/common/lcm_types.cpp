@@ -9,6 +9,7 @@
 #include "polarslam/grid_request_t.hpp"
 #include "polarslam/grid_status_t.hpp"
 #include "polarslam/laser_scan_t.hpp"
+#include "polarslam/map_request_t.hpp"
 #include "polarslam/odometry_t.hpp"
 #include "polarslam/path_t.hpp"
 #include "polarslam/pose_graph_t.hpp"
@@ -32,7 +33,8 @@ std::string lcmTypeName(const uint8_t* data, size_t size) {
       entry<laser_scan_t>(), entry<sonar_targets_t>(), entry<odometry_t>(), entry<pose_t>(),
       entry<features_t>(),   entry<slam_map_t>(),      entry<scan_anchors_t>(), entry<scan_match_t>(),
       entry<process_status_t>(), entry<goal_t>(),     entry<grid_request_t>(),
-      entry<path_t>(),       entry<grid_status_t>(),   entry<pose_graph_t>(), entry<grid_map_t>()};
+      entry<path_t>(),       entry<grid_status_t>(),   entry<pose_graph_t>(), entry<grid_map_t>(),
+      entry<map_request_t>()};
   if (size < 8) return {};
   int64_t hash = 0;
   for (int i = 0; i < 8; ++i) hash = static_cast<int64_t>((static_cast<uint64_t>(hash) << 8) | data[i]);

@@ -2,7 +2,8 @@
 // frame "map", one per scan, with covariance), PSM_SLAM_ANCHORS (anchored_pose_t, the same pose
 // relative to its reference scan) and PSM_SLAM_GRAPH (pose_graph_t: after every optimisation,
 // when the graph has otherwise changed at most every --graph-period seconds, and once more on
-// exit after a final optimisation). A thin shell over core/slam/psm_slam.hpp, the class
+// exit after a final optimisation). With --save-map M it saves its map (core/map/map_store.hpp)
+// on every SAVE_MAP request (map_request_t) and on exit. A thin shell over core/slam/psm_slam.hpp, the class
 // `polarslam run --pipeline psm-slam` runs with the same --config file.
 #include <CLI/CLI.hpp>
 
@@ -15,6 +16,8 @@
 #include "common/process_context.hpp"
 #include "common/pose_graph_message.hpp"
 #include "pipeline/psm_slam_estimator.hpp"
+#include "map_saving.hpp"
+#include "polarslam/map_request_t.hpp"
 #include "slam/psm_slam.hpp"
 
 using namespace polarslam;
@@ -23,7 +26,7 @@ namespace {
 
 struct Channels {
   std::string laser = "LASER", odometry = "ODOMETRY", pose = "PSM_SLAM_POSE", anchors = "PSM_SLAM_ANCHORS",
-              graph = "PSM_SLAM_GRAPH";
+              graph = "PSM_SLAM_GRAPH", save_map = "SAVE_MAP";
 };
 
 class GraphPublisher {
@@ -71,6 +74,12 @@ int main(int argc, char** argv) {
   app.add_option("--pose-channel", channels.pose, "channel of the robot poses (pose_t)")->capture_default_str();
   app.add_option("--anchors-channel", channels.anchors, "poses relative to their reference scan")->capture_default_str();
   app.add_option("--graph-channel", channels.graph, "channel of the pose graph (pose_graph_t)")->capture_default_str();
+  std::string save_map;
+  app.add_option("--save-map", save_map,
+                 "save the map (pose graph, reference scans, grid, parameters) to this folder on exit and on "
+                 "every SAVE_MAP request, replacing the older map only once the new one is complete");
+  app.add_option("--save-map-channel", channels.save_map, "channel of the save requests (map_request_t)")
+      ->capture_default_str();
   JournalOptions journal;
   addJournalOptions(app, journal);
   bool print_config = false;
@@ -82,7 +91,20 @@ int main(int argc, char** argv) {
   }
 
   try {
-    PsmSlam slam(config.empty() ? PsmSlamParams{} : loadPsmSlamEstimatorConfig(config).slam);
+    const PsmSlamEstimatorConfig estimator_config =
+        config.empty() ? PsmSlamEstimatorConfig{} : loadPsmSlamEstimatorConfig(config);
+    PsmSlam slam(estimator_config.slam);
+    LiveMapSaver map_saver(save_map, estimator_config);
+    auto save = [&](const char* why) {
+      try {
+        map_saver.save(slam);
+        std::cerr << "polarslam-psm-slam: map saved to " << map_saver.folder() << " (" << why << ")\n";
+        return true;
+      } catch (const std::exception& e) {
+        std::cerr << "polarslam-psm-slam: map not saved (" << why << "): " << e.what() << "\n";
+        return false;
+      }
+    };
     ProcessContext context("polarslam-psm-slam", process_options);
     context.enableJournal(journal);
     GraphPublisher graph(context, channels.graph, graph_period);
@@ -92,6 +114,7 @@ int main(int argc, char** argv) {
       if (!r.usable) context.reject("laser: too few usable readings to match");
       context.publish(channels.pose, toLcm(r.pose, "map", pose_seq++));
       context.publish(channels.anchors, toLcm(r.anchor, anchor_seq++));
+      map_saver.onScan(scan, r.anchor);
       if (r.new_keyframe || r.loop_closed || r.optimized) graph.changed();
       last_utime = scan.utime;
       graph.publishIfDue(slam, last_utime, r.optimized);
@@ -101,15 +124,23 @@ int main(int argc, char** argv) {
       slam.addOdometry(reading);
       context.handled();
     });
+    context.subscribe<polarslam::map_request_t>(channels.save_map, [&](const polarslam::map_request_t&) {
+      if (!map_saver.enabled()) return context.reject("SAVE_MAP: no --save-map folder");
+      if (!save("request")) return context.reject("SAVE_MAP: saving failed");
+      context.handled();
+    });
     context.run({}, [&] { graph.publishIfDue(slam, last_utime); });
+    bool saved = true;
     if (slam.started()) {
       slam.optimize();
       graph.changed();
       graph.publishIfDue(slam, last_utime, true);
+      if (map_saver.enabled()) saved = save("exit");
     }
     const PsmSlamStats& s = slam.stats();
     std::cerr << "polarslam-psm-slam: " << s.scans << " scans, " << s.keyframes << " reference scans, "
               << s.loop_closures << " loop closures, " << s.optimizations << " optimisations\n";
+    if (!saved) return 1;
   } catch (const std::exception& e) {
     std::cerr << "polarslam-psm-slam: " << e.what() << "\n";
     return 1;

@@ -13,6 +13,7 @@
 #include "io/tum.hpp"
 #include "offline_log.hpp"
 #include "pipeline/pipelines.hpp"
+#include "pipeline/psm_slam_estimator.hpp"
 
 namespace polarslam {
 namespace {
@@ -23,6 +24,7 @@ struct RunOptions {
   SensorChannelNames channels;
   bool print_config = false;
   double max_time_jump_s = 10.0;
+  std::string save_map;  ///< psm-slam: folder the map is saved to (core/map/map_store.hpp)
 };
 
 /// Ground truth re-expressed in the robot's starting frame, which is the map frame of every estimator.
@@ -112,9 +114,12 @@ void runPipeline(RunOptions o) {
   if ((o.pipeline == "recorded") != !o.channels.estimated_pose.empty())
     throw std::runtime_error("--pose-channel goes with --pipeline recorded, and only with it");
   const std::string label = o.pipeline == "recorded" ? o.channels.estimated_pose + " (recorded)" : o.pipeline;
+  if (!o.save_map.empty() && o.pipeline != "psm-slam")
+    throw std::runtime_error("--save-map goes with --pipeline psm-slam");
   if (o.pipeline == "recorded") addRecordedChannels(o.channels);
   std::filesystem::create_directories(o.out);
   std::unique_ptr<Estimator> estimator = factory->second(o.pipeline_options);
+  if (auto* psm_slam = dynamic_cast<PsmSlamEstimator*>(estimator.get())) psm_slam->saveMapTo(o.save_map);
   OdometryEstimator dead_reckoning;
   std::vector<PoseStamped> truth;
 
@@ -187,6 +192,9 @@ void setupRun(CLI::App& sub) {
       ->check(CLI::IsMember({"laser", "sonar", "fused"}))->capture_default_str();
   sub.add_option("--config", o->pipeline_options.config, "estimator parameters (YAML)")->check(CLI::ExistingFile);
   sub.add_option("-o,--out", o->out, "output folder");
+  sub.add_option("--save-map", o->save_map,
+                 "with --pipeline psm-slam: save the map (pose graph, reference scans, grid, parameters) to this "
+                 "folder, replacing an older map there only once the new one is complete");
   sub.add_option("--max-time-jump", o->max_time_jump_s,
                  "s: a message stamped further than this from the other channels is rejected and counted")
       ->check(CLI::PositiveNumber)->capture_default_str();

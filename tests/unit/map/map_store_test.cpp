@@ -1,0 +1,278 @@
+#include "map/map_store.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <numbers>
+
+#include "grid/occupancy_grid.hpp"
+#include "io/text_fields.hpp"
+
+namespace polarslam {
+namespace {
+namespace fs = std::filesystem;
+
+LaserScan testScan(int64_t utime, double phase) {
+  LaserScan scan;
+  scan.utime = utime;
+  scan.seq = utime / 1000;
+  scan.angle_min = -std::numbers::pi / 2;
+  scan.angle_increment = std::numbers::pi / 180;
+  scan.time_increment = 1.0 / 13300;
+  scan.range_max = 8.1;
+  scan.laser_pose = Pose2(0.1, 0.0, 0.0);
+  for (int i = 0; i < 181; ++i) scan.ranges.push_back(static_cast<float>(2.0 + std::sin(0.1 * i + phase) / 3.0));
+  scan.ranges[7] = std::numeric_limits<float>::infinity();  // no return: must survive the round trip
+  return scan;
+}
+
+StoredMap testMap() {
+  StoredMap map;
+  map.laser = laserGeometryOf(testScan(0, 0));
+  for (int64_t id = 0; id < 4; ++id)
+    map.graph.addNode({id, 1000000 + id * 250000, Pose2(0.3 * id + 1.0 / 3, -0.1 * id, 0.2 * id - 0.7)});
+  PoseGraphEdge edge;
+  for (int64_t id = 1; id < 4; ++id) {
+    edge.from = id - 1;
+    edge.to = id;
+    edge.measurement = Pose2(0.3, 0.1 / 7, 0.2);
+    edge.covariance << 1e-4, 1e-6, 0, 1e-6, 2e-4, 0, 0, 0, 1e-5;
+    edge.kind = id == 2 ? PoseGraphEdgeKind::Odometry : PoseGraphEdgeKind::Match;
+    map.graph.addEdge(edge);
+  }
+  edge.from = 0;
+  edge.to = 3;
+  edge.kind = PoseGraphEdgeKind::Loop;
+  map.graph.addEdge(edge);
+  map.graph.edges().back().active = false;
+  for (int64_t id = 0; id < 4; ++id) {
+    MapReferenceScan reference{testScan(1000000 + id * 250000, 0.5 * id), {}};
+    reference.anchor = {reference.scan.utime, id, Pose2(), true};
+    map.scans.push_back(reference);
+  }
+  map.parameters_yaml = "psm_slam:\n  max_range: 8.0\n";
+  return map;
+}
+
+class MapStore : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() /
+            ("polarslam-map-test-" + std::to_string(::getpid()) + "-" +
+             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+    dir_ = (root_ / "office").string();
+  }
+  void TearDown() override { fs::remove_all(root_); }
+
+  /// Loads the map and returns the error message (empty if it loaded).
+  std::string loadError(const std::optional<LaserGeometry>& laser = std::nullopt) const {
+    try {
+      loadMap(dir_, laser);
+    } catch (const MapFormatError& e) {
+      return e.what();
+    }
+    return {};
+  }
+  void rewrite(const std::string& name, const std::string& content) const {
+    std::ofstream(dir_ + "/" + name, std::ios::binary | std::ios::trunc) << content;
+  }
+
+  fs::path root_;
+  std::string dir_;
+};
+
+void expectSamePose(const Pose2& a, const Pose2& b) {
+  EXPECT_EQ(a.x, b.x);
+  EXPECT_EQ(a.y, b.y);
+  EXPECT_EQ(a.theta, b.theta);
+}
+
+TEST_F(MapStore, SaveThenLoadRoundTripsExactly) {
+  const StoredMap saved = testMap();
+  saveMap(dir_, saved);
+  const StoredMap loaded = loadMap(dir_, saved.laser);
+
+  ASSERT_EQ(loaded.graph.nodes().size(), saved.graph.nodes().size());
+  for (size_t i = 0; i < saved.graph.nodes().size(); ++i) {
+    EXPECT_EQ(loaded.graph.nodes()[i].id, saved.graph.nodes()[i].id);
+    EXPECT_EQ(loaded.graph.nodes()[i].utime, saved.graph.nodes()[i].utime);
+    expectSamePose(loaded.graph.nodes()[i].pose, saved.graph.nodes()[i].pose);
+  }
+  ASSERT_EQ(loaded.graph.edges().size(), saved.graph.edges().size());
+  for (size_t i = 0; i < saved.graph.edges().size(); ++i) {
+    const PoseGraphEdge &a = loaded.graph.edges()[i], &b = saved.graph.edges()[i];
+    EXPECT_EQ(a.from, b.from);
+    EXPECT_EQ(a.to, b.to);
+    EXPECT_EQ(a.kind, b.kind);
+    EXPECT_EQ(a.active, b.active);
+    expectSamePose(a.measurement, b.measurement);
+    EXPECT_EQ(a.covariance, b.covariance);
+  }
+  ASSERT_EQ(loaded.scans.size(), saved.scans.size());
+  for (size_t i = 0; i < saved.scans.size(); ++i) {
+    const LaserScan &a = loaded.scans[i].scan, &b = saved.scans[i].scan;
+    EXPECT_EQ(a.utime, b.utime);
+    EXPECT_EQ(a.seq, b.seq);
+    EXPECT_EQ(a.angle_min, b.angle_min);
+    EXPECT_EQ(a.angle_increment, b.angle_increment);
+    EXPECT_EQ(a.time_increment, b.time_increment);
+    EXPECT_EQ(a.range_max, b.range_max);
+    expectSamePose(a.laser_pose, b.laser_pose);
+    EXPECT_EQ(a.ranges, b.ranges);
+    EXPECT_EQ(loaded.scans[i].anchor.node, saved.scans[i].anchor.node);
+    EXPECT_EQ(loaded.scans[i].anchor.new_node, saved.scans[i].anchor.new_node);
+    expectSamePose(loaded.scans[i].anchor.relative, saved.scans[i].anchor.relative);
+  }
+  EXPECT_EQ(loaded.parameters_yaml, saved.parameters_yaml);
+  EXPECT_EQ(laserGeometryMismatch(loaded.laser, saved.laser), "");
+}
+
+TEST_F(MapStore, SavingTwiceGivesIdenticalFiles) {
+  saveMap(dir_, testMap());
+  const std::string first = readTextFile(dir_ + "/scans.txt") + readTextFile(dir_ + "/graph.txt");
+  saveMap(dir_, loadMap(dir_));
+  EXPECT_EQ(readTextFile(dir_ + "/scans.txt") + readTextFile(dir_ + "/graph.txt"), first);
+}
+
+TEST_F(MapStore, ReplacesAnOldMapAndLeavesNoTemporaryFolder) {
+  saveMap(dir_, testMap());
+  StoredMap smaller = testMap();
+  smaller.scans.resize(1);
+  saveMap(dir_, smaller);
+  EXPECT_EQ(loadMap(dir_).scans.size(), 1u);
+  size_t entries = 0;
+  for ([[maybe_unused]] const auto& entry : fs::directory_iterator(root_)) ++entries;
+  EXPECT_EQ(entries, 1u);
+}
+
+TEST_F(MapStore, AFailedSaveLeavesTheOldMapIntact) {
+  saveMap(dir_, testMap());
+  StoredMap bad = testMap();
+  bad.scans[2].anchor.node = 99;  // a node the graph lacks
+  EXPECT_THROW(saveMap(dir_, bad), MapFormatError);
+  EXPECT_EQ(loadMap(dir_).scans.size(), 4u);
+  EXPECT_FALSE(fs::exists(dir_ + ".saving-" + std::to_string(::getpid())));
+}
+
+TEST_F(MapStore, RefusesToReplaceAFolderThatIsNotAMap) {
+  fs::create_directories(dir_);
+  std::ofstream(dir_ + "/thesis.tex") << "precious";
+  EXPECT_THROW(saveMap(dir_, testMap()), MapFormatError);
+  EXPECT_TRUE(fs::exists(dir_ + "/thesis.tex"));
+}
+
+TEST_F(MapStore, RefusesAScanThatDoesNotMatchTheMapsLaser) {
+  StoredMap map = testMap();
+  map.scans[1].scan.ranges.pop_back();
+  EXPECT_THROW(saveMap(dir_, map), MapFormatError);
+}
+
+TEST_F(MapStore, SavesAndChecksTheGridFiles) {
+  OccupancyGrid grid;
+  const StoredMap map = testMap();
+  for (const MapReferenceScan& reference : map.scans) grid.insertScan(reference.scan, map.graph.node(reference.anchor.node).pose);
+  saveMap(dir_, map, &grid);
+  for (const char* name : {"map.ot", "map.bt", "map.pgm", "map.yaml", "map.png"}) EXPECT_TRUE(fs::exists(dir_ + "/" + name)) << name;
+  EXPECT_EQ(loadError(), "");
+  std::string png = readTextFile(dir_ + "/map.png");
+  png[png.size() / 2] = static_cast<char>(png[png.size() / 2] ^ 0x01);
+  rewrite("map.png", png);
+  const std::string error = loadError();
+  EXPECT_NE(error.find("map.png"), std::string::npos) << error;
+  EXPECT_NE(error.find("CRC32"), std::string::npos) << error;
+}
+
+TEST_F(MapStore, RefusesAMissingFolder) {
+  const std::string error = loadError();
+  EXPECT_NE(error.find("office"), std::string::npos) << error;
+}
+
+TEST_F(MapStore, RefusesATruncatedFileNamingIt) {
+  saveMap(dir_, testMap());
+  const std::string scans = readTextFile(dir_ + "/scans.txt");
+  rewrite("scans.txt", scans.substr(0, scans.size() / 2));
+  const std::string error = loadError();
+  EXPECT_NE(error.find("scans.txt"), std::string::npos) << error;
+  EXPECT_NE(error.find("truncated"), std::string::npos) << error;
+}
+
+TEST_F(MapStore, RefusesATruncatedManifest) {
+  saveMap(dir_, testMap());
+  const std::string manifest = readTextFile(dir_ + "/manifest.json");
+  rewrite("manifest.json", manifest.substr(0, manifest.size() - 20));
+  const std::string error = loadError();
+  EXPECT_NE(error.find("manifest.json"), std::string::npos) << error;
+}
+
+TEST_F(MapStore, RefusesAnotherFormatVersion) {
+  saveMap(dir_, testMap());
+  std::string manifest = readTextFile(dir_ + "/manifest.json");
+  const size_t at = manifest.find("\"version\": 1");
+  ASSERT_NE(at, std::string::npos);
+  manifest.replace(at, 12, "\"version\": 2");
+  rewrite("manifest.json", manifest);
+  const std::string error = loadError();
+  EXPECT_NE(error.find("manifest.json"), std::string::npos) << error;
+  EXPECT_NE(error.find("version 2"), std::string::npos) << error;
+}
+
+TEST_F(MapStore, RefusesAChecksumMismatchNamingTheFile) {
+  saveMap(dir_, testMap());
+  std::string graph = readTextFile(dir_ + "/graph.txt");
+  const size_t at = graph.find("node 1 ");
+  ASSERT_NE(at, std::string::npos);
+  graph[at + 5] = '2';  // same size, different content
+  rewrite("graph.txt", graph);
+  const std::string error = loadError();
+  EXPECT_NE(error.find("graph.txt"), std::string::npos) << error;
+  EXPECT_NE(error.find("CRC32"), std::string::npos) << error;
+}
+
+TEST_F(MapStore, RefusesAMapMadeWithAnotherLaser) {
+  saveMap(dir_, testMap());
+  LaserGeometry other = testMap().laser;
+  other.beams = 361;
+  std::string error = loadError(other);
+  EXPECT_NE(error.find("manifest.json"), std::string::npos) << error;
+  EXPECT_NE(error.find("another laser"), std::string::npos) << error;
+  other = testMap().laser;
+  other.mount.x += 0.05;
+  error = loadError(other);
+  EXPECT_NE(error.find("mount"), std::string::npos) << error;
+  EXPECT_EQ(loadError(testMap().laser), "");
+}
+
+TEST_F(MapStore, RefusesAMissingListedFile) {
+  saveMap(dir_, testMap());
+  fs::remove(dir_ + "/parameters.yaml");
+  const std::string error = loadError();
+  EXPECT_NE(error.find("parameters.yaml"), std::string::npos) << error;
+}
+
+TEST_F(MapStore, RefusesAWellChecksummedButMalformedRecordNamingTheLine) {
+  // A writer bug, not disk damage: the checksum fits, the content does not.
+  StoredMap map = testMap();
+  saveMap(dir_, map);
+  const std::string original = readTextFile(dir_ + "/graph.txt");
+  const std::string graph = original + "edge 0 7 1 1 0 0 0 1 0 0 0 1 0 0 0 1\n";  // node 7 does not exist
+  rewrite("graph.txt", graph);
+  std::string manifest = readTextFile(dir_ + "/manifest.json");
+  const std::string old_entry_bytes = "\"bytes\": " + std::to_string(original.size());
+  const size_t at = manifest.find(old_entry_bytes);
+  ASSERT_NE(at, std::string::npos);
+  manifest.replace(at, old_entry_bytes.size(), "\"bytes\": " + std::to_string(graph.size()));
+  const std::string old_crc = std::to_string(mapCrc32(original));
+  manifest.replace(manifest.find(old_crc), old_crc.size(), std::to_string(mapCrc32(graph)));
+  rewrite("manifest.json", manifest);
+  const std::string error = loadError();
+  EXPECT_NE(error.find("graph.txt:"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace polarslam
