@@ -1,6 +1,8 @@
 #include "grid/grid_files.hpp"
 
+#include <fcntl.h>
 #include <octomap/OcTree.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -22,13 +24,40 @@ std::string formatNumber(double v) {
   return buf;
 }
 
+/// Debian's liboctomap is built with its debug messages on: serialising a tree prints "Writing N
+/// nodes ... done." on standard error. This sends file descriptor 2 to /dev/null for its lifetime.
+class SilencedStderr {
+ public:
+  SilencedStderr() {
+    std::fflush(stderr);
+    saved_ = dup(STDERR_FILENO);
+    const int null_fd = open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (saved_ >= 0 && null_fd >= 0) dup2(null_fd, STDERR_FILENO);
+    if (null_fd >= 0) close(null_fd);
+  }
+  ~SilencedStderr() {
+    std::fflush(stderr);
+    if (saved_ < 0) return;
+    dup2(saved_, STDERR_FILENO);
+    close(saved_);
+  }
+  SilencedStderr(const SilencedStderr&) = delete;
+  SilencedStderr& operator=(const SilencedStderr&) = delete;
+
+ private:
+  int saved_ = -1;
+};
+
 /// map.ot (full probabilities) and map.bt (maximum likelihood). writeBinary converts the tree it
 /// writes in place, so the .ot goes first.
 void writeOctrees(const std::string& ot_path, const std::string& bt_path, octomap::OcTree& tree) {
-  std::ostringstream ot(std::ios::binary);
-  if (!tree.write(ot) || !ot) throw std::runtime_error("cannot serialise octree for '" + ot_path + "'");
-  std::ostringstream bt(std::ios::binary);
-  if (!tree.writeBinary(bt) || !bt) throw std::runtime_error("cannot serialise octree for '" + bt_path + "'");
+  std::ostringstream ot(std::ios::binary), bt(std::ios::binary);
+  bool written = false;
+  {
+    const SilencedStderr quiet;
+    written = tree.write(ot) && ot && tree.writeBinary(bt) && bt;
+  }
+  if (!written) throw std::runtime_error("cannot serialise the octrees for '" + ot_path + "' and '" + bt_path + "'");
   writeFileAtomically(ot_path, ot.str());
   writeFileAtomically(bt_path, bt.str());
 }

@@ -47,7 +47,8 @@ struct LineParser {
     in.skip();  // laser type
     LaserScan scan;
     scan.angle_min = in.finite("start_angle");
-    in.finite("fov");
+    const double fov = in.finite("fov");
+    if (!(fov > 0.0 && fov <= 2.0 * std::numbers::pi + 1e-6)) in.fail("fov must be in (0, 2 pi]");
     scan.angle_increment = in.finite("angular_res");
     const double max_range = in.finite("max_range");
     in.skip(2);  // accuracy, remission mode

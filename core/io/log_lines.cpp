@@ -40,10 +40,21 @@ bool parseLogInteger(std::string_view text, int64_t& value) {
   return ec == std::errc() && end == text.data() + text.size();
 }
 
+namespace {
+// Why a field that parseLogDouble refused is not a usable double: "1e309" is a number, too big.
+std::string numberProblem(std::string_view text) {
+  if (!text.empty() && text.front() == '+') text.remove_prefix(1);
+  double ignored = 0.0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), ignored);
+  const bool whole = end == text.data() + text.size();
+  return ec == std::errc::result_out_of_range && whole ? " is out of range of a double" : " is not a number";
+}
+}  // namespace
+
 double FieldCursor::number(const char* what) {
   const std::string_view f = take(what);
   double v = 0.0;
-  if (!parseLogDouble(f, v)) fail(std::string(what) + " " + quotedField(f) + " is not a number");
+  if (!parseLogDouble(f, v)) fail(std::string(what) + " " + quotedField(f) + numberProblem(f));
   return v;
 }
 
@@ -56,7 +67,7 @@ double FieldCursor::finite(const char* what) {
 float FieldCursor::range(size_t index) {
   const std::string_view f = take("range");
   double v = 0.0;
-  if (!parseLogDouble(f, v)) fail("range " + std::to_string(index) + " " + quotedField(f) + " is not a number");
+  if (!parseLogDouble(f, v)) fail("range " + std::to_string(index) + " " + quotedField(f) + numberProblem(f));
   return static_cast<float>(v);
 }
 

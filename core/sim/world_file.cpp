@@ -1,5 +1,7 @@
 // loadWorld: the YAML world file format documented in config/worlds/README.md.
 #include <algorithm>
+#include <numbers>
+#include <sstream>
 #include <stdexcept>
 
 #include "sim/world.hpp"
@@ -154,6 +156,39 @@ WorldPath parsePath(const YamlFields& f, const YAML::Node& node) {
   return path;
 }
 
+/// Walls enclose a point when a ray in every one of 16 directions meets one (every wall stops sound).
+bool enclosedByWalls(const World& world, const Vec2& p) {
+  const double reach = 2.0 * (world.boundsMax() - world.boundsMin()).norm() + 1.0;
+  constexpr int kDirections = 16;
+  for (int k = 0; k < kDirections; ++k)
+    if (!world.castRay(p, 2.0 * std::numbers::pi * k / kDirections, reach, Sensor::Sonar).hit) return false;
+  return true;
+}
+
+std::string formatPoint(const Vec2& p) {
+  std::ostringstream s;
+  s << "(" << p.x() << ", " << p.y() << ")";
+  return s.str();
+}
+
+/// The simulated robot drives straight from the start through each waypoint: none of that may
+/// leave the walls or pass through one.
+void checkStartAndPath(const YamlFields& f, const YAML::Node& root, const World& world) {
+  if (world.start && !enclosedByWalls(world, world.start->translation()))
+    f.fail(root["start"], "start: " + formatPoint(world.start->translation()) + " is outside the walls");
+  const auto& wps = world.path.waypoints;
+  for (size_t i = 0; i < wps.size(); ++i) {
+    const YAML::Node at = root["path"]["waypoints"][i];
+    const std::string name = "path.waypoints[" + std::to_string(i) + "]";
+    if (!enclosedByWalls(world, wps[i])) f.fail(at, name + ": " + formatPoint(wps[i]) + " is outside the walls");
+    const bool first_leg = i == 0;
+    if (first_leg && !world.start) continue;
+    const Vec2 from = first_leg ? world.start->translation() : wps[i - 1];
+    if ((from - wps[i]).norm() > 1e-9 && !world.lineOfSight(from, wps[i], Sensor::Sonar, 0.0))
+      f.fail(at, name + ": the way there from " + formatPoint(from) + " passes through a wall");
+  }
+}
+
 }  // namespace
 
 World loadWorld(const std::string& yaml_path) {
@@ -174,6 +209,7 @@ World loadWorld(const std::string& yaml_path) {
   }
   if (const YAML::Node start = root["start"]) world.start = f.pose(start, "start", kCoordinateLimit);
   if (const YAML::Node path = root["path"]) world.path = parsePath(f, path);
+  checkStartAndPath(f, root, world);
   return world;
 }
 

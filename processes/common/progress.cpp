@@ -1,6 +1,8 @@
 #include "common/progress.hpp"
 
 #include <algorithm>
+#include <unistd.h>
+
 #include <cstdio>
 
 namespace polarslam {
@@ -10,7 +12,16 @@ ProgressBar::ProgressBar(std::string label)
 
 ProgressBar::~ProgressBar() { finish(); }
 
+namespace {
+// A bar redrawn with '\r' is noise in a log file or a pipe: only a terminal gets one.
+bool stderrIsATerminal() {
+  static const bool terminal = isatty(STDERR_FILENO) == 1;
+  return terminal;
+}
+}  // namespace
+
 void ProgressBar::update(double fraction) {
+  if (!stderrIsATerminal()) return;
   const auto now = std::chrono::steady_clock::now();
   if (now - start_ < std::chrono::seconds(1) || now - last_draw_ < std::chrono::milliseconds(200)) return;
   last_draw_ = now;

@@ -99,9 +99,9 @@ void importRangeLog(const ImportOptions& o) {
   ProgressBar progress(o.command);
   std::string format;
   const RangeLog log = readInput(o, progress, format);
-  if (log.events.empty()) {
+  if (log.laserCount() == 0) {
     progress.finish();
-    std::string why = "'" + o.in + "' holds no laser or odometry line of the " + format +
+    std::string why = "'" + o.in + "' holds no usable laser line of the " + format +
                       " format (" + summary(log) + ")";
     if (!log.malformed.empty()) why += "; first problem: " + o.in + ":" + std::to_string(log.malformed[0].line) + ": " + log.malformed[0].reason;
     throw std::runtime_error(why);

@@ -25,8 +25,7 @@ class Dispatcher {
     CoreT value;
     if (const std::string why = fromLcm(msg, value); !why.empty()) return reject(why);
     ++summary_.messages[event.channel];
-    if (summary_.first_utime == 0) summary_.first_utime = event.utime;
-    summary_.last_utime = event.utime;
+    summary_.noteStamp(event.utime);
     sink(value);
   }
 

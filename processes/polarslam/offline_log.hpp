@@ -1,5 +1,6 @@
 #pragma once
 // Reads an LCM log of sensor channels into core structs, counting what it must reject.
+#include <algorithm>
 #include <functional>
 #include <map>
 #include <string>
@@ -46,7 +47,14 @@ struct SensorLogSummary {
   std::map<std::string, long> rejected;  ///< per reason
   std::map<std::string, ProcessCounts> processes;  ///< PROCESS_STATUS by process name (live recordings)
   std::vector<std::string> log_warnings;  ///< a truncated or corrupt log, with byte offsets
+  /// Earliest and latest stamp delivered: a log recorded backwards still spans a positive time.
   int64_t first_utime = 0, last_utime = 0;
+  bool any_stamp = false;
+  void noteStamp(int64_t utime) {
+    first_utime = any_stamp ? std::min(first_utime, utime) : utime;
+    last_utime = any_stamp ? std::max(last_utime, utime) : utime;
+    any_stamp = true;
+  }
   double durationSeconds() const { return static_cast<double>(last_utime - first_utime) * 1e-6; }
 };
 

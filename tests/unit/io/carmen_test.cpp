@@ -140,6 +140,19 @@ TEST(Carmen, MalformedLinesAreCountedWithLineNumbersAndSkipped) {
   EXPECT_EQ(log.events.back().line, 13);
 }
 
+TEST(Carmen, HugeNumbersAreOutOfRangeAndAZeroFieldOfViewIsRefused) {
+  std::ostringstream s;
+  s << flaserLine(181, 2.0, "1.0").replace(10, 3, " 1e309 ") << "\n";
+  s << "ROBOTLASER1 0 -1.5707963 0 0.0174533 50.0 0.01 0 181";
+  for (int i = 0; i < 181; ++i) s << " 4.0";
+  s << " 0 0 0 0 0 0 0 0 0 0 0 0 100.0 host 100.1\n";
+  const CarmenLog log = parse(s.str());
+  ASSERT_EQ(log.malformed_count, 2);
+  EXPECT_NE(log.malformed[0].reason.find("'1e309' is out of range"), std::string::npos) << log.malformed[0].reason;
+  EXPECT_NE(log.malformed[1].reason.find("fov"), std::string::npos) << log.malformed[1].reason;
+  EXPECT_EQ(log.laserCount(), 0);
+}
+
 TEST(Carmen, OutOfOrderTimestampsAreKeptInFileOrder) {
   const CarmenLog log = parse(flaserLine(181, 2, "5.0") + "\n" + flaserLine(181, 2, "4.0") + "\n" +
                               flaserLine(181, 2, "6.0") + "\n");

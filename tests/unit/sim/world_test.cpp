@@ -232,6 +232,13 @@ TEST_F(WorldFileErrors, NameFileLineAndProblem) {
       {"walls:\n  - points: [[0, 0], [1, 0], [2, 0]]\n    materials: [wall]\n", ":3:", "2 segments"},
       {"walls:\n  - points: [[0, 0], [1, 0]]\npath:\n  waypoints: [[0, 0], [1, .nan]]\n", ":4:", "finite"},
       {"walls: [\n", ":", "syntax"},
+      {"walls:\n  - points: [[0, 0], [4, 0], [4, 4], [0, 4]]\n    closed: true\nstart: {x: 9, y: 1, theta_deg: 0}\n",
+       ":4:", "start: (9, 1) is outside the walls"},
+      {"walls:\n  - points: [[0, 0], [4, 0], [4, 4], [0, 4]]\n    closed: true\npath:\n  waypoints:\n    - [1, 1]\n"
+       "    - [9, 1]\n", ":7:", "(9, 1) is outside the walls"},
+      {"walls:\n  - points: [[0, 0], [4, 0], [4, 4], [0, 4]]\n    closed: true\n  - points: [[2, 0], [2, 4]]\n"
+       "start: {x: 1, y: 1, theta_deg: 0}\npath:\n  waypoints:\n    - [1, 2]\n    - [3, 2]\n",
+       ":9:", "passes through a wall"},
   };
   for (const Case& c : cases) {
     const std::string msg = errorOf(c.text);
