@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "command_registry.hpp"
+#include "common/match_request.hpp"
 #include "common/progress.hpp"
 #include "io/atomic_file.hpp"
 #include "scanmatch/laser_odometry.hpp"
@@ -24,53 +25,16 @@ struct MatchOptions {
   int decimation = 1;
 };
 
-/// SCAN = {"angle_min", "angle_increment", "range_max", "ranges": [...]}; null ranges = no return.
-std::string scanFromJson(const json& j, LaserScan& scan) {
-  if (!j.is_object()) return "is not an object";
-  for (const char* key : {"angle_min", "angle_increment", "range_max"})
-    if (!j.contains(key) || !j[key].is_number()) return std::string("has no numeric '") + key + "'";
-  scan.angle_min = j["angle_min"].get<double>();
-  scan.angle_increment = j["angle_increment"].get<double>();
-  scan.range_max = j["range_max"].get<double>();
-  if (!j.contains("ranges") || !j["ranges"].is_array()) return "has no 'ranges' array";
-  const json& ranges = j["ranges"];
-  if (ranges.size() > kMaxLaserBeams) return "has too many ranges";
-  scan.ranges.resize(ranges.size());
-  for (size_t i = 0; i < ranges.size(); ++i) {
-    if (ranges[i].is_null()) scan.ranges[i] = std::numeric_limits<float>::quiet_NaN();
-    else if (ranges[i].is_number()) scan.ranges[i] = ranges[i].get<float>();
-    else return "ranges[" + std::to_string(i) + "] is not a number";
-  }
-  const std::string why = validateScan(scan);
-  return why.empty() ? why : "is invalid: " + why;
-}
-
-std::string guessFromJson(const json& line, Pose2& guess) {
-  if (!line.contains("guess")) return {};  // optional: zero motion
-  const json& g = line["guess"];
-  if (!g.is_array() || g.size() != 3) return "'guess' is not [x, y, theta]";
-  for (const json& v : g)
-    if (!v.is_number() || !std::isfinite(v.get<double>())) return "'guess' holds a non-finite value";
-  guess = {g[0].get<double>(), g[1].get<double>(), wrapAngle(g[2].get<double>())};
-  return {};
-}
-
 json failure(const std::string& status) {
   return {{"pose", nullptr}, {"cov", nullptr}, {"iterations", 0}, {"valid_points", 0}, {"time_us", 0}, {"status", status}};
 }
 
 json matchLine(const std::string& text, ScanMatcher& matcher, MatchMethod method) {
-  const json line = json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (line.is_discarded()) return failure("bad input: not valid JSON");
-  if (!line.is_object()) return failure("bad input: not a JSON object");
-  LaserScan ref, cur;
-  Pose2 guess;
-  for (auto [key, scan] : {std::pair<const char*, LaserScan*>{"ref", &ref}, {"cur", &cur}}) {
-    if (!line.contains(key)) return failure(std::string("bad input: no '") + key + "' scan");
-    const std::string why = scanFromJson(line[key], *scan);
-    if (!why.empty()) return failure(std::string("bad input: '") + key + "' " + why);
-  }
-  if (const std::string why = guessFromJson(line, guess); !why.empty()) return failure("bad input: " + why);
+  MatchRequest request;
+  if (const std::string why = parseMatchRequest(text, request); !why.empty()) return failure(why);
+  const LaserScan& ref = request.ref;
+  const LaserScan& cur = request.cur;
+  const Pose2& guess = request.guess;
 
   const double start = threadCpuMicros();
   const PreparedScan ref_prepared = prepareScan(ref, matcher.params());
