@@ -1,6 +1,8 @@
 // polarslam run: the whole pipeline offline over an LCM log, as fast as the CPU allows, with the
 // same core code the live processes use. Writes trajectory.tum, report.json and plots.
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -25,7 +27,101 @@ struct RunOptions {
   bool print_config = false;
   double max_time_jump_s = 10.0;
   std::string save_map;  ///< psm-slam: folder the map is saved to (core/map/map_store.hpp)
+  bool strict = false;    ///< a run without usable laser data is an error, not a warning
 };
+
+std::atomic<int> stop_signal{0};
+extern "C" void requestStop(int signal_number) { stop_signal = signal_number; }
+
+/// The run writes into OUT.incomplete and only a finished run becomes OUT (replacing an older
+/// one whole), so an interrupted run never leaves a partial folder and two runs never mix files.
+class OutputFolder {
+ public:
+  explicit OutputFolder(std::filesystem::path final_dir)
+      : final_(std::move(final_dir)), work_(final_.string() + ".incomplete") {
+    std::filesystem::remove_all(work_);
+    std::filesystem::create_directories(work_);
+  }
+  ~OutputFolder() {
+    std::error_code ignored;
+    if (!published_) std::filesystem::remove_all(work_, ignored);
+  }
+  OutputFolder(const OutputFolder&) = delete;
+  OutputFolder& operator=(const OutputFolder&) = delete;
+
+  const std::filesystem::path& work() const { return work_; }
+  void publish() {
+    const std::filesystem::path old = final_.string() + ".old";
+    std::filesystem::remove_all(old);
+    if (std::filesystem::exists(final_)) std::filesystem::rename(final_, old);
+    std::filesystem::rename(work_, final_);
+    std::filesystem::remove_all(old);
+    published_ = true;
+  }
+
+ private:
+  std::filesystem::path final_, work_;
+  bool published_ = false;
+};
+
+/// SIGINT and SIGTERM end the run between two messages (the handlers are restored on return).
+class StopOnSignals {
+ public:
+  StopOnSignals() {
+    stop_signal = 0;
+    previous_int_ = std::signal(SIGINT, requestStop);
+    previous_term_ = std::signal(SIGTERM, requestStop);
+  }
+  ~StopOnSignals() {
+    std::signal(SIGINT, previous_int_);
+    std::signal(SIGTERM, previous_term_);
+  }
+  StopOnSignals(const StopOnSignals&) = delete;
+  StopOnSignals& operator=(const StopOnSignals&) = delete;
+  void throwIfStopped(const std::string& out) const {
+    if (const int sig = stop_signal.load(); sig != 0)
+      throw std::runtime_error(std::string("stopped by ") + (sig == SIGINT ? "SIGINT" : "SIGTERM") +
+                               ": nothing written to '" + out + "'");
+  }
+
+ private:
+  void (*previous_int_)(int) = SIG_DFL;
+  void (*previous_term_)(int) = SIG_DFL;
+};
+
+/// File names the estimators put in the report point into the work folder: name the final one.
+void relocatePaths(nlohmann::json& value, const std::string& from, const std::string& to) {
+  if (value.is_string()) {
+    const std::string& text = value.get_ref<const std::string&>();
+    if (text.starts_with(from)) value = to + text.substr(from.size());
+  } else if (value.is_structured()) {
+    for (auto& item : value) relocatePaths(item, from, to);
+  }
+}
+
+bool usesLaser(const RunOptions& o) {
+  if (o.pipeline == "psm" || o.pipeline == "psm-slam") return true;
+  return o.pipeline == "ekf" && o.pipeline_options.sensors != "sonar";
+}
+
+bool hasAReturn(const LaserScan& scan) {
+  for (size_t i = 0; i < scan.ranges.size(); ++i)
+    if (scan.valid(i)) return true;
+  return false;
+}
+
+/// A laser pipeline that never saw a usable scan has only dead reckoning to show: say so on
+/// stderr and in the report, or fail with --strict.
+void checkLaserData(const RunOptions& o, int64_t scans, int64_t usable_scans, nlohmann::json& report) {
+  if (!usesLaser(o) || usable_scans > 0) return;
+  const std::string why = scans == 0 ? "the log has no " + o.channels.laser + " message"
+                                     : "none of the " + std::to_string(scans) + " " + o.channels.laser +
+                                           " scans has a valid range";
+  const std::string what = why + ": the " + o.pipeline + " trajectory is odometry only";
+  if (o.strict) throw std::runtime_error(what + " (--strict)");
+  std::cerr << "warning: run " << o.pipeline << ": " << what << "\n";
+  report["warnings"].push_back(what);
+}
 
 /// Ground truth re-expressed in the robot's starting frame, which is the map frame of every estimator.
 std::vector<PoseStamped> inStartFrame(std::vector<PoseStamped> poses) {
@@ -117,7 +213,10 @@ void runPipeline(RunOptions o) {
   if (!o.save_map.empty() && o.pipeline != "psm-slam")
     throw std::runtime_error("--save-map goes with --pipeline psm-slam");
   if (o.pipeline == "recorded") addRecordedChannels(o.channels);
-  std::filesystem::create_directories(o.out);
+  const std::string final_out = o.out;
+  const StopOnSignals stop;
+  OutputFolder folder(final_out);
+  o.out = folder.work().string();
   std::unique_ptr<Estimator> estimator = factory->second(o.pipeline_options);
   if (auto* psm_slam = dynamic_cast<PsmSlamEstimator*>(estimator.get())) psm_slam->saveMapTo(o.save_map);
   OdometryEstimator dead_reckoning;
@@ -125,9 +224,16 @@ void runPipeline(RunOptions o) {
 
   const auto start = std::chrono::steady_clock::now();
   SensorLogVisitor visitor;
-  visitor.laser = [&](const LaserScan& s) { estimator->onLaser(s); };
+  int64_t scans = 0, usable_scans = 0;
+  visitor.laser = [&](const LaserScan& s) {
+    stop.throwIfStopped(final_out);
+    ++scans;
+    if (hasAReturn(s)) ++usable_scans;
+    estimator->onLaser(s);
+  };
   visitor.sonar = [&](const SonarScan& s) { estimator->onSonar(s); };
   visitor.odometry = [&](const OdometryReading& r) {
+    stop.throwIfStopped(final_out);
     estimator->onOdometry(r);
     dead_reckoning.onOdometry(r);
   };
@@ -140,6 +246,7 @@ void runPipeline(RunOptions o) {
   const SensorLogSummary summary = visitSensorLog(o.log, o.channels, visitor, "run " + o.pipeline,
                                                   {static_cast<int64_t>(o.max_time_jump_s * 1e6), 3});
   nlohmann::json report;
+  checkLaserData(o, scans, usable_scans, report);
   estimator->finish(o.out, report);
   const double run_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -172,13 +279,16 @@ void runPipeline(RunOptions o) {
   plotTrajectories((dir / "trajectory.png").string(), label + " trajectory", estimate, truth,
                    o.pipeline == "odometry" ? std::vector<PoseStamped>{} : dead_reckoning.trajectory());
   plotErrorOverTime((dir / "error.png").string(), estimate, truth);
+  relocatePaths(report, o.out, final_out);
   writeFileAtomically((dir / "report.json").string(), report.dump(2) + "\n");
+  stop.throwIfStopped(final_out);
+  folder.publish();
   std::cout << "run " << o.pipeline << ": " << estimate.size() << " poses, "
             << report.value("realtime_factor", 0.0) << "x real time";
   if (report.contains("ate_rmse_m"))
     std::cout << ", ATE RMSE " << report["ate_rmse_m"].get<double>() << " m (online "
               << report["online_ate_rmse_m"].get<double>() << " m)";
-  std::cout << " -> " << o.out << "\n";
+  std::cout << " -> " << final_out << "\n";
 }
 
 void setupRun(CLI::App& sub) {
@@ -195,6 +305,8 @@ void setupRun(CLI::App& sub) {
   sub.add_option("--save-map", o->save_map,
                  "with --pipeline psm-slam: save the map (pose graph, reference scans, grid, parameters) to this "
                  "folder, replacing an older map there only once the new one is complete");
+  sub.add_flag("--strict", o->strict,
+               "fail, instead of warning, when a laser pipeline finds no usable scan (no LASER message, or no valid range)");
   sub.add_option("--max-time-jump", o->max_time_jump_s,
                  "s: a message stamped further than this from the other channels is rejected and counted")
       ->check(CLI::PositiveNumber)->capture_default_str();

@@ -7,8 +7,10 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 
 #include "child_process.hpp"
+#include "common/lcm_log.hpp"
 
 namespace polarslam {
 namespace {
@@ -75,6 +77,47 @@ TEST_F(BrokenFiles, AnImportWithoutOneUsableLaserLineFails) {
   EXPECT_NE(out.find("holds no usable laser line"), std::string::npos) << out;
   EXPECT_NE(out.find("bad.log:2:"), std::string::npos) << out;
   EXPECT_FALSE(std::filesystem::exists(dir_ / "bad.lcmlog"));
+}
+
+TEST_F(BrokenFiles, ALaserPipelineWithoutLaserDataWarnsOrFailsWhenStrict) {
+  LcmLogReader reader(sourcePath("logs/office.lcmlog"));
+  const std::string no_laser = (dir_ / "no-laser.lcmlog").string();
+  LcmLogWriter writer(no_laser);
+  LogEvent event;
+  while (reader.next(event))
+    if (event.channel != "LASER") writer.writeRaw(event.channel, event.utime, event.data.data(), event.data.size());
+  writer.close();
+  std::string out;
+  ASSERT_EQ(polarslam({"run", "--log", no_laser, "--pipeline", "psm-slam", "-o", (dir_ / "run").string()}, out), 0) << out;
+  EXPECT_NE(out.find("warning: run psm-slam: the log has no LASER message"), std::string::npos) << out;
+  EXPECT_NE(readFile((dir_ / "run" / "report.json").string()).find("odometry only"), std::string::npos);
+  EXPECT_EQ(polarslam({"run", "--log", no_laser, "--pipeline", "psm-slam", "--strict", "-o", (dir_ / "strict").string()}, out), 1);
+  EXPECT_NE(out.find("(--strict)"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "strict"));
+}
+
+TEST_F(BrokenFiles, AStoppedRunLeavesNoFolderAndARerunReplacesTheOldOne) {
+  const auto out_dir = dir_ / "run";
+  std::filesystem::create_directories(out_dir);
+  std::ofstream(out_dir / "from-an-older-run.txt") << "stale\n";
+  std::string out;
+  ASSERT_EQ(polarslam({"run", "--log", sourcePath("logs/office.lcmlog"), "-o", out_dir.string()}, out), 0) << out;
+  EXPECT_TRUE(std::filesystem::exists(out_dir / "report.json"));
+  EXPECT_FALSE(std::filesystem::exists(out_dir / "from-an-older-run.txt")) << "two runs' files mixed";
+
+  const auto stopped = dir_ / "stopped";
+  ::polarslam::testing::ChildProcess run({binPath("polarslam"), "run", "--log", sourcePath("logs/office.lcmlog"),
+                                          "--pipeline", "psm-slam", "-o", stopped.string()},
+                                         (dir_ / "stopped.out").string());
+  const auto work = dir_ / "stopped.incomplete";
+  for (int i = 0; i < 2000 && !std::filesystem::exists(work); ++i) std::this_thread::sleep_for(1ms);
+  ASSERT_TRUE(std::filesystem::exists(work)) << "the run never started";
+  run.signal(SIGTERM);
+  ASSERT_TRUE(run.waitFor(60s));
+  EXPECT_EQ(run.exitCode(), 1);
+  EXPECT_NE(readFile(dir_ / "stopped.out").find("stopped by SIGTERM"), std::string::npos) << readFile(dir_ / "stopped.out");
+  EXPECT_FALSE(std::filesystem::exists(stopped));
+  EXPECT_FALSE(std::filesystem::exists(work));
 }
 
 }  // namespace
