@@ -2,26 +2,49 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
 #include <system_error>
 
 namespace polarslam {
 
-InputJournal::InputJournal(std::string path, std::chrono::milliseconds flush_period)
-    : path_(std::move(path)), flush_period_(flush_period) {}
+InputJournal::InputJournal(std::string path, std::chrono::milliseconds flush_period, std::string launch_id)
+    : path_(std::move(path)), launch_id_(std::move(launch_id)), flush_period_(flush_period) {}
 
-std::vector<LogEvent> InputJournal::recover() {
+std::string InputJournal::currentLaunchId() {
+  const char* id = std::getenv("POLARSLAM_LAUNCH_ID");
+  return id ? id : "";
+}
+
+std::vector<LogEvent> InputJournal::readOwnEvents() {
   std::vector<LogEvent> events;
   std::error_code size_error;
-  if (std::filesystem::file_size(path_, size_error) > 0 && !size_error) {
-    LcmLogReader reader(path_);
-    LogEvent event;
-    while (reader.next(event)) events.push_back(event);
+  if (std::filesystem::file_size(path_, size_error) == 0 || size_error) return events;
+  LcmLogReader reader(path_);
+  LogEvent event;
+  std::string owner;  // a journal without a header was written by hand-started processes
+  if (reader.next(event)) {
+    if (event.channel == kHeaderChannel) owner.assign(event.data.begin(), event.data.end());
+    else events.push_back(event);
   }
+  if (owner != launch_id_) {
+    refused_ = "journal '" + path_ + "' belongs to launch '" + (owner.empty() ? "(started by hand)" : owner) +
+               "', not to this one ('" + (launch_id_.empty() ? "(started by hand)" : launch_id_) +
+               "'): stale (a reused run folder?), not replayed; kept as '" + path_ + ".stale'";
+    std::filesystem::rename(path_, path_ + ".stale");
+    return {};
+  }
+  while (reader.next(event)) events.push_back(event);
+  return events;
+}
+
+std::vector<LogEvent> InputJournal::recover() {
+  const std::vector<LogEvent> events = readOwnEvents();
   const std::string tmp = path_ + ".tmp";
   log_ = std::make_unique<lcm::LogFile>(tmp, "w");
   if (!log_->good()) throw std::runtime_error("cannot write journal '" + tmp + "'");
+  append(kHeaderChannel, 0, launch_id_.data(), launch_id_.size());
   for (const LogEvent& e : events) append(e.channel, e.utime, e.data.data(), e.data.size());
   std::fflush(log_->getFilePtr());
   std::error_code ec;

@@ -5,6 +5,11 @@
 // listens again, so it resumes with the state it had — the same state, because the core is
 // deterministic — and a final map still covers the whole run. Messages that arrived while it
 // was down are the only loss.
+//
+// A journal belongs to one launch: its first event (channel POLARSLAM_JOURNAL) names the launch
+// that wrote it, POLARSLAM_LAUNCH_ID as polarslam-launch sets it (empty for a process started by
+// hand). A journal of another launch (a reused --run-dir) is stale: it is refused, kept aside as
+// FILE.stale, and the process starts empty, saying so on stderr.
 #include <lcm/lcm-cpp.hpp>
 
 #include <chrono>
@@ -23,11 +28,15 @@ namespace polarslam {
 
 class InputJournal {
  public:
-  InputJournal(std::string path, std::chrono::milliseconds flush_period);
+  /// `launch_id`: who this process belongs to (default: the POLARSLAM_LAUNCH_ID environment variable).
+  InputJournal(std::string path, std::chrono::milliseconds flush_period, std::string launch_id = currentLaunchId());
   InputJournal(const InputJournal&) = delete;
   InputJournal& operator=(const InputJournal&) = delete;
 
-  /// The journal's intact events (a last event torn by a crash is dropped). Rewrites the file
+  static std::string currentLaunchId();
+  static constexpr const char* kHeaderChannel = "POLARSLAM_JOURNAL";
+
+  /// The journal's intact events (a last event torn by a crash is dropped; nothing from a stale journal). Rewrites the file
   /// with exactly those (temp file + rename, so a crash now loses nothing) and keeps it open for
   /// appending. Call once, before append().
   std::vector<LogEvent> recover();
@@ -35,9 +44,13 @@ class InputJournal {
   /// Flushes to the kernel when the flush period has passed since the last flush.
   void flushIfDue();
   const std::string& path() const { return path_; }
+  /// Why the journal found on disk was not replayed ("" when it was, or there was none).
+  const std::string& refused() const { return refused_; }
 
  private:
-  std::string path_;
+  std::vector<LogEvent> readOwnEvents();
+
+  std::string path_, launch_id_, refused_;
   std::chrono::milliseconds flush_period_;
   std::unique_ptr<lcm::LogFile> log_;
   std::chrono::steady_clock::time_point last_flush_;

@@ -135,6 +135,7 @@ void ProcessContext::enableJournal(const JournalOptions& options) {
 
 void ProcessContext::resumeFromJournal() {
   const std::vector<LogEvent> events = journal_->recover();
+  if (!journal_->refused().empty()) std::cerr << "[" << name_ << "] warning: " << journal_->refused() << "\n";
   if (events.empty()) return;
   replaying_ = true;
   for (const LogEvent& event : events) {

@@ -6,8 +6,10 @@
 #include <sys/prctl.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <iostream>
+#include <string>
 
 #include "common/program_info.hpp"
 #include "common/process_context.hpp"
@@ -22,6 +24,12 @@ extern char** environ;
 using namespace polarslam;
 
 namespace {
+
+std::string launchId(const std::string& host) {
+  const auto now = std::chrono::system_clock::now().time_since_epoch();
+  return host + "-" + std::to_string(getpid()) + "-" +
+         std::to_string(std::chrono::duration_cast<std::chrono::microseconds>(now).count());
+}
 
 Environment currentEnvironment() {
   Environment env;
@@ -91,6 +99,9 @@ int main(int argc, char** argv) {
     StatusPublisher status(resolveLcmUrl(url), host_label);
     RunLogs logs(run_dir.empty() ? defaultRunDir(host_label) : run_dir);
     child_env["POLARSLAM_RUN_DIR"] = std::filesystem::absolute(logs.dir()).string();
+    // Each launch has its own identity: a journal left in a reused run folder by an earlier launch
+    // is stale and its stage refuses to replay it (processes/common/input_journal.hpp).
+    child_env["POLARSLAM_LAUNCH_ID"] = launchId(host_label);
     // Orphaned descendants come to the launcher instead of init, so none can outlive it unseen.
     prctl(PR_SET_CHILD_SUBREAPER, 1);
     const bool live_table = !no_tui && stdoutIsAScreen();
