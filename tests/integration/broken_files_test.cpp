@@ -101,9 +101,15 @@ TEST_F(BrokenFiles, AStoppedRunLeavesNoFolderAndARerunReplacesTheOldOne) {
   std::filesystem::create_directories(out_dir);
   std::ofstream(out_dir / "from-an-older-run.txt") << "stale\n";
   std::string out;
-  ASSERT_EQ(polarslam({"run", "--log", sourcePath("logs/office.lcmlog"), "-o", out_dir.string()}, out), 0) << out;
+  ASSERT_EQ(polarslam({"run", "--log", sourcePath("logs/office.lcmlog"), "--pipeline", "psm-slam", "-o", out_dir.string()},
+                      out),
+            0)
+      << out;
   EXPECT_TRUE(std::filesystem::exists(out_dir / "report.json"));
   EXPECT_FALSE(std::filesystem::exists(out_dir / "from-an-older-run.txt")) << "two runs' files mixed";
+  // Not on a terminal: no progress bar redrawn with '\r', and nothing of liboctomap's debug output.
+  EXPECT_EQ(out.find('\r'), std::string::npos) << out;
+  EXPECT_EQ(out.find(" done."), std::string::npos) << out;
 
   const auto stopped = dir_ / "stopped";
   ::polarslam::testing::ChildProcess run({binPath("polarslam"), "run", "--log", sourcePath("logs/office.lcmlog"),
