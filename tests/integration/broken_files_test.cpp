@@ -96,6 +96,22 @@ TEST_F(BrokenFiles, ALaserPipelineWithoutLaserDataWarnsOrFailsWhenStrict) {
   EXPECT_FALSE(std::filesystem::exists(dir_ / "strict"));
 }
 
+TEST_F(BrokenFiles, ALogRecordedBackwardsHasAPositiveRealTimeFactor) {
+  LcmLogReader reader(sourcePath("logs/office.lcmlog"));
+  std::vector<LogEvent> events;
+  LogEvent event;
+  while (reader.next(event) && events.size() < 3000) events.push_back(event);
+  const std::string reversed = (dir_ / "reversed.lcmlog").string();
+  LcmLogWriter writer(reversed);
+  for (auto e = events.rbegin(); e != events.rend(); ++e) writer.writeRaw(e->channel, e->utime, e->data.data(), e->data.size());
+  writer.close();
+  std::string out;
+  ASSERT_EQ(polarslam({"run", "--log", reversed, "-o", (dir_ / "run").string()}, out), 0) << out;
+  const std::string report = readFile((dir_ / "run" / "report.json").string());
+  EXPECT_EQ(report.find("\"realtime_factor\": -"), std::string::npos) << report;
+  EXPECT_NE(report.find("\"realtime_factor\": "), std::string::npos) << report;
+}
+
 TEST_F(BrokenFiles, AStoppedRunLeavesNoFolderAndARerunReplacesTheOldOne) {
   const auto out_dir = dir_ / "run";
   std::filesystem::create_directories(out_dir);
