@@ -14,7 +14,7 @@ using Environment = std::map<std::string, std::string>;
 /// Restart delays after consecutive crashes: initial, initial·factor, … up to max. A process that
 /// ran for reset_after seconds before crashing counts as a first crash again.
 struct RestartBackoff {
-  double initial_s = 0.2;
+  double initial_s = 0.05;  // a stateless stage back within a scan period: little input lost
   double factor = 2.0;
   double max_s = 30.0;
   double reset_after_s = 10.0;

@@ -67,7 +67,7 @@ void InputJournal::append(const std::string& channel, int64_t utime, const void*
 
 void InputJournal::flushIfDue() {
   const auto now = std::chrono::steady_clock::now();
-  if (!log_ || now - last_flush_ < flush_period_) return;
+  if (!log_ || (flush_period_.count() > 0 && now - last_flush_ < flush_period_)) return;
   std::fflush(log_->getFilePtr());
   last_flush_ = now;
 }
@@ -76,8 +76,10 @@ void addJournalOptions(CLI::App& app, JournalOptions& options) {
   app.add_option("--journal", options.path,
                  "crash recovery: append every input message to this file (an LCM log) and, on start, "
                  "resume by replaying it");
-  app.add_option("--journal-flush", options.flush_period, "s between flushes of the journal to disk")
-      ->check(CLI::PositiveNumber)
+  app.add_option("--journal-flush", options.flush_period,
+                 "s between flushes of the journal to the kernel (0: after every message, which a kill -9 "
+                 "cannot lose)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
 }
 

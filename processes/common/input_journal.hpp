@@ -1,6 +1,7 @@
 #pragma once
 // Crash recovery for the stateful processes (the SLAM estimators, the grid): every input message
-// is appended to a journal, an ordinary LCM log, flushed to disk every flush period. A process
+// is appended to a journal, an ordinary LCM log, handed to the kernel after every message (or every
+// flush period), so a kill -9 loses none of it. A process
 // restarted after a crash (kill -9, a bug) replays the journal through its own handlers before it
 // listens again, so it resumes with the state it had — the same state, because the core is
 // deterministic — and a final map still covers the whole run. Messages that arrived while it
@@ -41,7 +42,7 @@ class InputJournal {
   /// appending. Call once, before append().
   std::vector<LogEvent> recover();
   void append(const std::string& channel, int64_t utime, const void* data, size_t size);
-  /// Flushes to the kernel when the flush period has passed since the last flush.
+  /// Flushes to the kernel when the flush period has passed since the last flush (always when it is 0).
   void flushIfDue();
   const std::string& path() const { return path_; }
   /// Why the journal found on disk was not replayed ("" when it was, or there was none).
@@ -58,7 +59,7 @@ class InputJournal {
 
 struct JournalOptions {
   std::string path;         ///< empty: no journal
-  double flush_period = 1.0;  ///< s
+  double flush_period = 0.0;  ///< s; 0: after every message (one write(2) each, a few hundred a second)
 };
 
 /// --journal FILE and --journal-flush S, the same on every process that keeps state.

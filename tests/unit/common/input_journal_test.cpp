@@ -1,5 +1,7 @@
 // InputJournal: a journal resumes its own launch and refuses another launch's (issue 16, item 5).
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -66,6 +68,32 @@ TEST_F(InputJournalTest, HandStartedProcessesResumeTheirOwnButNotALaunchersJourn
   std::string refused;
   EXPECT_TRUE(runLaunch("", 0, &refused).empty());
   EXPECT_NE(refused.find("(started by hand)"), std::string::npos) << refused;
+}
+
+// A process killed with SIGKILL right after handling a message: with the default options the
+// message is in the journal (the kernel has it), whatever the time since the last flush.
+TEST_F(InputJournalTest, WithTheDefaultOptionsAKillNineRightAfterAMessageLosesNothing) {
+  runLaunch("host-1-100", 1);
+  const JournalOptions defaults;
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    InputJournal journal(path_, std::chrono::milliseconds(static_cast<int64_t>(defaults.flush_period * 1000)),
+                         "host-1-100");
+    journal.recover();
+    for (int i = 0; i < 4; ++i) {
+      const std::string payload = "handled#" + std::to_string(i);
+      journal.append("ODOMETRY", 2000 + i, payload.data(), payload.size());
+      journal.flushIfDue();  // what ProcessContext::run does after each message
+    }
+    raise(SIGKILL);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  const std::vector<LogEvent> replayed = runLaunch("host-1-100", 0);
+  ASSERT_EQ(replayed.size(), 5u) << "the earlier message and all four handled before the kill";
+  EXPECT_EQ(std::string(replayed[4].data.begin(), replayed[4].data.end()), "handled#3");
 }
 
 }  // namespace
