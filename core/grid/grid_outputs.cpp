@@ -3,12 +3,10 @@
 #include <chrono>
 #include <unordered_map>
 
+#include "io/stopwatch.hpp"
+
 namespace polarslam {
 namespace {
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 std::vector<AnchoredScan> pairByUtime(const std::vector<LaserScan>& scans, const std::vector<ScanAnchors>& anchors) {
   std::unordered_map<int64_t, const LaserScan*> by_utime;

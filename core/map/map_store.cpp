@@ -486,4 +486,16 @@ StoredMap loadMap(const std::string& dir, const std::optional<LaserGeometry>& ex
   return map;
 }
 
+std::vector<MapReference> mapReferences(const StoredMap& map) {
+  std::vector<MapReference> references;
+  references.reserve(map.scans.size());
+  for (const MapReferenceScan& s : map.scans) {
+    const int64_t node = s.anchor.node;
+    const Pose2 pose = node >= 0 && map.graph.indexOf(node) >= 0 ? map.graph.node(node).pose * s.anchor.relative
+                                                                  : s.anchor.relative;
+    references.push_back({node, pose, s.scan});
+  }
+  return references;
+}
+
 }  // namespace polarslam

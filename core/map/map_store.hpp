@@ -20,6 +20,7 @@
 
 #include "geometry/pose2.hpp"
 #include "laser/laser_scan.hpp"
+#include "slam/map_localizer.hpp"
 #include "slam/pose_graph.hpp"
 
 namespace polarslam {
@@ -79,6 +80,10 @@ StoredMap loadMap(const std::string& dir, const std::optional<LaserGeometry>& ex
 /// or when the scans disagree on the laser geometry.
 StoredMap storedMapOf(const PoseGraph& graph, const std::vector<LaserScan>& scans,
                       const std::vector<AnchoredPose>& anchors, std::string parameters_yaml);
+
+/// The reference scans of a map with their robot poses in the map frame (node pose ⊕ anchor), for
+/// localisation (slam/map_localizer.hpp).
+std::vector<MapReference> mapReferences(const StoredMap& map);
 
 /// zlib's CRC32 of `bytes` (the manifest's per-file checksum).
 uint32_t mapCrc32(const std::string& bytes);

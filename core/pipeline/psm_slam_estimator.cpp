@@ -5,13 +5,10 @@
 
 #include "grid/grid_files.hpp"
 #include "pipeline/g2o_export.hpp"
+#include "io/stopwatch.hpp"
 
 namespace polarslam {
 namespace {
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 nlohmann::json optimizationJson(const PoseGraphOptimizationSummary& s) {
   return {{"solved", s.solved},           {"iterations", s.iterations},     {"rounds", s.rounds},

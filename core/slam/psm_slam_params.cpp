@@ -103,6 +103,19 @@ void describeGraph(ParameterTable& t, PsmSlamParams& p) {
   t.integer("max_outlier_rounds", p.graph.max_outlier_rounds, 0, 100, "re-solves after deactivating edges");
 }
 
+void describeLocalization(ParameterTable& t, MapLocalizationParams& p) {
+  t.number("track_radius", p.track_radius, 0.0, 1000.0, "m: reference scans matched when tracking within");
+  t.angle("track_heading_deg", p.track_heading, 0.0, 180.0, "the same for heading");
+  t.integer("track_candidates", p.track_candidates, 1, 100, "tracking matches per scan at most");
+  t.integer("lost_after_scans", p.lost_after_scans, 1, 100000, "scans without a match: lost, search globally");
+  t.integer("global_headings", p.global_headings, 1, 360, "headings tried per reference scan in a global search");
+  t.number("global_min_overlap", p.global_min_overlap, 0.0, 1.0, "associated fraction of a global hit at least");
+  t.number("global_ambiguity_distance", p.global_ambiguity_distance, 0.0, 1000.0, "m: another hit this far away ...");
+  t.number("global_ambiguity_ratio", p.global_ambiguity_ratio, 1.0, 1000.0, "... this nearly as good: no fix");
+  t.number("confirm_translation", p.confirm_translation, 0.0, 100.0, "m: two hits agree after the odometry");
+  t.angle("confirm_rotation_deg", p.confirm_rotation, 0.0, 180.0, "the same for heading");
+}
+
 }  // namespace
 
 void describePsmSlamParams(ParameterTable& table, PsmSlamParams& p) {
@@ -117,6 +130,8 @@ void describePsmSlamParams(ParameterTable& table, PsmSlamParams& p) {
   describeLoops(table.section("loop_closure", "loop closures"), p);
   describeGraph(table.section("graph", "global pose-graph optimisation"), p);
   describeMatcher(table.section("psm", "the polar scan matcher"), p.psm);
+  describeLocalization(table.section("localization", "localisation in a stored map (--load-map, --mode localize)"),
+                       p.localization);
 }
 
 }  // namespace polarslam

@@ -10,6 +10,30 @@
 
 namespace polarslam {
 
+/// Localisation in a stored map (map_localizer.hpp): `polarslam run --load-map M --mode localize`.
+struct MapLocalizationParams {
+  /// Tracking: reference scans within this distance and heading of the predicted pose are
+  /// matched, nearest first, at most track_candidates of them per scan.
+  double track_radius = 2.0;             ///< m
+  double track_heading = deg2rad(90.0);
+  int track_candidates = 2;
+  /// This many scans in a row without an applied match: the robot is lost (kidnapped, or its
+  /// odometry failed) and the global search takes over.
+  int lost_after_scans = 5;
+  /// Global search: each reference scan is matched from this many headings spread over the full
+  /// circle (PSM's first orientation step searches ±loop_search_window around each).
+  int global_headings = 6;
+  /// A hit needs this overlap (stricter than tracking) and loop_max_error_index.
+  double global_min_overlap = 0.5;
+  /// Another hit more than global_ambiguity_distance (or loop_ambiguity_heading) away with an
+  /// error index within global_ambiguity_ratio of the best makes the search ambiguous: no fix.
+  double global_ambiguity_distance = 0.5;  ///< m
+  double global_ambiguity_ratio = 2.0;
+  /// The hit of the next search must agree with the previous one after the odometry in between.
+  double confirm_translation = 0.15;     ///< m
+  double confirm_rotation = deg2rad(5.0);
+};
+
 struct PsmSlamParams {
   PsmParams psm;                         ///< the matcher's own parameters
   MatchMethod method = MatchMethod::Psm;
@@ -124,6 +148,9 @@ struct PsmSlamParams {
   /// Loop closures within this many new keyframes of the last optimisation wait for the next one
   /// (the filter has already applied them); the end of the run always optimises.
   int min_keyframes_between_optimizations = 15;
+
+  // --- localisation in a stored map ---
+  MapLocalizationParams localization;
 };
 
 /// Every parameter above as a configuration key (the keys of config/psm-slam.yaml, angles in

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include "command_registry.hpp"
 #include "eval/ate.hpp"
@@ -15,6 +16,8 @@
 #include "io/tum.hpp"
 #include "offline_log.hpp"
 #include "pipeline/pipelines.hpp"
+#include "pipeline/map_localization_estimator.hpp"
+#include "map/map_store.hpp"
 #include "pipeline/psm_slam_estimator.hpp"
 
 namespace polarslam {
@@ -28,7 +31,37 @@ struct RunOptions {
   double max_time_jump_s = 10.0;
   std::string save_map;  ///< psm-slam: folder the map is saved to (core/map/map_store.hpp)
   bool strict = false;    ///< a run without usable laser data is an error, not a warning
+  std::string load_map;   ///< psm-slam: a saved map to localise in (core/slam/map_localizer.hpp)
+  std::string mode = "localize";
+  std::string initial_pose;  ///< "x,y,theta" in the map frame (m, m, rad); empty: search globally
 };
+
+/// "x,y,theta" (m, m, rad) as a pose; throws naming the option otherwise.
+Pose2 parseInitialPose(const std::string& text) {
+  std::istringstream in(text);
+  double v[3];
+  char comma1 = 0, comma2 = 0;
+  if (!(in >> v[0] >> comma1 >> v[1] >> comma2 >> v[2]) || comma1 != ',' || comma2 != ',' || !(in >> std::ws).eof() ||
+      !std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
+    throw std::runtime_error("--initial-pose '" + text + "': expected x,y,theta (m, m, rad), three finite numbers");
+  return Pose2(v[0], v[1], v[2]);
+}
+
+/// The estimator of a run: the pipeline's, or with --load-map localisation in the stored map.
+std::unique_ptr<Estimator> makeEstimator(const RunOptions& o) {
+  if (o.load_map.empty()) {
+    if (!o.initial_pose.empty()) throw std::runtime_error("--initial-pose goes with --load-map");
+    std::unique_ptr<Estimator> estimator = pipelines().at(o.pipeline)(o.pipeline_options);
+    if (auto* psm_slam = dynamic_cast<PsmSlamEstimator*>(estimator.get())) psm_slam->saveMapTo(o.save_map);
+    return estimator;
+  }
+  if (o.pipeline != "psm-slam") throw std::runtime_error("--load-map goes with --pipeline psm-slam");
+  if (!o.save_map.empty()) throw std::runtime_error("--mode localize adds nothing to the map: no --save-map");
+  std::optional<Pose2> start;
+  if (!o.initial_pose.empty()) start = parseInitialPose(o.initial_pose);
+  return std::make_unique<MapLocalizationEstimator>(loadMap(o.load_map), loadPsmSlamEstimatorConfig(o.pipeline_options.config),
+                                                    start);
+}
 
 std::atomic<int> stop_signal{0};
 extern "C" void requestStop(int signal_number) { stop_signal = signal_number; }
@@ -209,7 +242,9 @@ void runPipeline(RunOptions o) {
   if (factory == factories.end()) throw std::runtime_error("unknown pipeline '" + o.pipeline + "'");
   if ((o.pipeline == "recorded") != !o.channels.estimated_pose.empty())
     throw std::runtime_error("--pose-channel goes with --pipeline recorded, and only with it");
-  const std::string label = o.pipeline == "recorded" ? o.channels.estimated_pose + " (recorded)" : o.pipeline;
+  const std::string label = o.pipeline == "recorded" ? o.channels.estimated_pose + " (recorded)"
+                            : o.load_map.empty() ? o.pipeline
+                                                 : o.pipeline + " (" + o.mode + " in " + o.load_map + ")";
   if (!o.save_map.empty() && o.pipeline != "psm-slam")
     throw std::runtime_error("--save-map goes with --pipeline psm-slam");
   if (o.pipeline == "recorded") addRecordedChannels(o.channels);
@@ -217,8 +252,7 @@ void runPipeline(RunOptions o) {
   const StopOnSignals stop;
   OutputFolder folder(final_out);
   o.out = folder.work().string();
-  std::unique_ptr<Estimator> estimator = factory->second(o.pipeline_options);
-  if (auto* psm_slam = dynamic_cast<PsmSlamEstimator*>(estimator.get())) psm_slam->saveMapTo(o.save_map);
+  std::unique_ptr<Estimator> estimator = makeEstimator(o);
   OdometryEstimator dead_reckoning;
   std::vector<PoseStamped> truth;
 
@@ -305,6 +339,15 @@ void setupRun(CLI::App& sub) {
   sub.add_option("--save-map", o->save_map,
                  "with --pipeline psm-slam: save the map (pose graph, reference scans, grid, parameters) to this "
                  "folder, replacing an older map there only once the new one is complete");
+  sub.add_option("--load-map", o->load_map,
+                 "with --pipeline psm-slam: a map saved by --save-map to work in (see --mode)")
+      ->check(CLI::ExistingDirectory);
+  sub.add_option("--mode", o->mode,
+                 "with --load-map: localize = match against the stored reference scans and add none")
+      ->check(CLI::IsMember({"localize"}))->capture_default_str();
+  sub.add_option("--initial-pose", o->initial_pose,
+                 "with --load-map: the start in the map frame, x,y,theta (m, m, rad); without it the start is "
+                 "searched among the reference scans");
   sub.add_flag("--strict", o->strict,
                "fail, instead of warning, when a laser pipeline finds no usable scan (no LASER message, or no valid range)");
   sub.add_option("--max-time-jump", o->max_time_jump_s,

@@ -1,0 +1,263 @@
+#include "slam/map_localizer.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace polarslam {
+namespace {
+
+bool finitePose(const Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
+
+Vec3 poseDifference(const Pose2& a, const Pose2& b) { return {a.x - b.x, a.y - b.y, wrapAngle(a.theta - b.theta)}; }
+
+std::optional<PreparedScan> prepareUsable(const LaserScan& scan, const PsmParams& params) {
+  if (!validateScan(scan).empty()) return std::nullopt;
+  try {
+    PreparedScan prepared = prepareScan(scan, params);
+    if (prepared.valid_count < params.min_valid_points) return std::nullopt;
+    return prepared;
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
+MapLocalizer::MapLocalizer(const std::vector<MapReference>& references, PsmSlamParams params)
+    : params_(std::move(params)), options_(params_.localization), matcher_(params_.psm), odometry_(params_.odometry) {
+  for (const MapReference& r : references) {
+    std::optional<PreparedScan> prepared = prepareUsable(r.scan, params_.psm);
+    if (!prepared || !finitePose(r.pose)) continue;
+    references_.push_back({r.id, r.pose, r.scan.laser_pose, std::move(*prepared)});
+  }
+  if (references_.empty()) throw std::invalid_argument("the map has no usable reference scan to localise against");
+}
+
+void MapLocalizer::setInitialPose(const Pose2& pose, const Mat3& cov) {
+  pose_ = pose;
+  cov_ = cov;
+  localized_ = true;
+  failures_in_a_row_ = 0;
+}
+
+void MapLocalizer::addOdometry(const OdometryReading& reading) {
+  const OdometryMotionResult result = odometry_.add(reading);
+  if (!result.ok()) return;
+  have_odometry_ = true;
+  const OdometryMotion& motion = *result.motion;
+  const Mat3 Ja = composeJacobianA(pending_motion_, motion.delta), Jb = composeJacobianB(pending_motion_);
+  pending_cov_ = Ja * pending_cov_ * Ja.transpose() + Jb * motion.cov * Jb.transpose();
+  pending_motion_ = pending_motion_ * motion.delta;
+}
+
+// The same prediction as PSM SLAM's filter (psm_slam.cpp): odometry motion with the §17.6 model,
+// plus a random walk per second of elapsed time.
+void MapLocalizer::predictTo(int64_t utime) {
+  const double dt = last_utime_ ? std::clamp(1e-6 * static_cast<double>(utime - *last_utime_), 0.0, 5.0) : 0.0;
+  last_utime_ = std::max(last_utime_.value_or(utime), utime);
+  Mat3 Q = pending_cov_;
+  const double noise_xy = have_odometry_ ? params_.time_noise_xy : params_.no_odometry_noise_xy;
+  const double noise_theta = have_odometry_ ? params_.time_noise_theta : params_.no_odometry_noise_theta;
+  Q += Vec3(noise_xy * dt, noise_xy * dt, noise_theta * dt).asDiagonal();
+  const Mat3 Ja = composeJacobianA(pose_, pending_motion_), Jb = composeJacobianB(pose_);
+  cov_ = Ja * cov_ * Ja.transpose() + Jb * Q * Jb.transpose();
+  pose_ = pose_ * pending_motion_;
+  pending_motion_ = Pose2();
+  pending_cov_.setZero();
+}
+
+std::optional<MapLocalizer::Fix> MapLocalizer::match(size_t index, const PreparedScan& scan, const Pose2& mount,
+                                                     const Pose2& relative_guess, bool wide) {
+  const Reference& ref = references_[index];
+  const double saved_window = matcher_.params().initial_search_window;
+  if (wide) matcher_.params().initial_search_window = params_.loop_search_window;
+  const Pose2 laser_guess = laserPoseInReferenceLaser(Pose2(), relative_guess, ref.laser_mount, mount);
+  const MatchResult m = matcher_.match(ref.scan, scan, laser_guess, params_.method);
+  matcher_.params().initial_search_window = saved_window;
+  if (!m.ok() || (wide && !m.converged) || !finitePose(m.pose) || !m.cov.allFinite()) return std::nullopt;
+  const Pose2 z = robotMotionFromLaserMotion(m.pose, ref.laser_mount, mount);
+  const Mat3 R = params_.match_cov_scale * robotMotionCovariance(m.pose, m.cov, ref.laser_mount, mount) +
+                 Vec3(params_.min_match_sigma_xy * params_.min_match_sigma_xy,
+                      params_.min_match_sigma_xy * params_.min_match_sigma_xy,
+                      params_.min_match_sigma_theta * params_.min_match_sigma_theta)
+                     .asDiagonal()
+                     .toDenseMatrix();
+  const Mat3 J = composeJacobianB(ref.pose);
+  Fix fix;
+  fix.reference = index;
+  fix.pose = ref.pose * z;
+  fix.cov = J * R * J.transpose();
+  fix.error_index = m.error_index;
+  fix.overlap = static_cast<double>(m.valid_points) / std::max(1, std::min(ref.scan.valid_count, scan.valid_count));
+  return fix;
+}
+
+bool MapLocalizer::goodFix(const Fix& fix, bool global) const {
+  const double max_error = global ? params_.loop_max_error_index : params_.max_error_index;
+  const double min_overlap = global ? options_.global_min_overlap : params_.min_overlap;
+  return std::isfinite(fix.error_index) && fix.error_index <= max_error && fix.overlap >= min_overlap &&
+         fix.cov.allFinite();
+}
+
+bool MapLocalizer::applyFix(const Fix& fix) {
+  Vec3 nu = poseDifference(fix.pose, pose_);
+  Mat3 S = cov_ + fix.cov;
+  double chi2 = nu.dot(S.ldlt().solve(nu));
+  if (!(chi2 <= params_.chi2_gate)) {
+    const Pose2 miss = between(pose_, fix.pose);
+    if (miss.translation().norm() > params_.max_odometry_fault_translation ||
+        std::abs(miss.theta) > params_.max_odometry_fault_rotation) {
+      ++stats_.gate_rejections;
+      return false;
+    }
+    // A good match close to the prediction but outside the gate: the odometry step was wrong
+    // (slip, a heading jump), as PSM SLAM treats it: widen the prior along the miss.
+    cov_ += nu * nu.transpose();
+    S = cov_ + fix.cov;
+    ++stats_.odometry_faults;
+  }
+  const Mat3 K = cov_ * S.inverse();
+  const Vec3 correction = K * nu;
+  pose_ = Pose2(pose_.x + correction.x(), pose_.y + correction.y(), wrapAngle(pose_.theta + correction.z()));
+  cov_ = (Mat3::Identity() - K) * cov_;
+  cov_ = 0.5 * (cov_ + cov_.transpose());
+  return true;
+}
+
+bool MapLocalizer::track(const PreparedScan& scan, const Pose2& mount, MapLocalizationResult& result) {
+  std::vector<std::pair<double, size_t>> nearest;
+  for (size_t i = 0; i < references_.size(); ++i) {
+    const Pose2 relative = between(references_[i].pose, pose_);
+    const double distance = relative.translation().norm();
+    if (distance <= options_.track_radius && std::abs(relative.theta) <= options_.track_heading)
+      nearest.emplace_back(distance + std::abs(relative.theta), i);
+  }
+  const size_t keep = std::min(nearest.size(), static_cast<size_t>(options_.track_candidates));
+  std::partial_sort(nearest.begin(), nearest.begin() + static_cast<long>(keep), nearest.end());
+  std::optional<Fix> best;
+  for (size_t k = 0; k < keep; ++k) {
+    const size_t i = nearest[k].second;
+    std::optional<Fix> fix = match(i, scan, mount, between(references_[i].pose, pose_), false);
+    if (fix && goodFix(*fix, false) && (!best || fix->error_index < best->error_index)) best = fix;
+  }
+  if (!best) {
+    ++stats_.match_failures;
+    return false;
+  }
+  if (!applyFix(*best)) return false;
+  result.matched = true;
+  result.reference = references_[best->reference].id;
+  return true;
+}
+
+std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const PreparedScan& scan, const Pose2& mount) {
+  ++stats_.global_searches;
+  std::vector<Fix> hits;
+  const int headings = std::max(1, options_.global_headings);
+  for (size_t i = 0; i < references_.size(); ++i)
+    for (int h = 0; h < headings; ++h) {
+      ++stats_.global_matches;
+      const Pose2 guess(0.0, 0.0, wrapAngle(2.0 * M_PI * h / headings));
+      std::optional<Fix> fix = match(i, scan, mount, guess, true);
+      if (fix && goodFix(*fix, true)) hits.push_back(*fix);
+    }
+  if (hits.empty()) return std::nullopt;
+  const auto best = std::min_element(hits.begin(), hits.end(),
+                                     [](const Fix& a, const Fix& b) { return a.error_index < b.error_index; });
+  for (const Fix& other : hits) {
+    const Pose2 apart = between(best->pose, other.pose);
+    const bool elsewhere = apart.translation().norm() > options_.global_ambiguity_distance ||
+                           std::abs(apart.theta) > params_.loop_ambiguity_heading;
+    if (elsewhere && other.error_index <= options_.global_ambiguity_ratio * best->error_index) {
+      ++stats_.global_ambiguous;
+      return std::nullopt;
+    }
+  }
+  return *best;
+}
+
+void MapLocalizer::lose() {
+  localized_ = false;
+  hypothesis_.reset();
+  ++stats_.losses;
+}
+
+MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
+  ++stats_.scans;
+  MapLocalizationResult result;
+  predictTo(scan.utime);
+  const Pose2 predicted = pose_;
+  std::optional<PreparedScan> prepared = prepareUsable(scan, params_.psm);
+  if (!prepared) {
+    ++stats_.unusable_scans;
+  } else if (localized_) {
+    result.usable = true;
+    failures_in_a_row_ = track(*prepared, scan.laser_pose, result) ? 0 : failures_in_a_row_ + 1;
+    if (failures_in_a_row_ >= options_.lost_after_scans) {
+      lose();
+      // The scans of the failed run had odometry-only poses already: re-placed with the rest.
+      const size_t failed = static_cast<size_t>(options_.lost_after_scans) - 1;
+      lost_since_ = online_.size() >= failed ? online_.size() - failed : 0;
+    }
+  } else {
+    result.usable = true;
+    std::optional<Fix> hit = searchGlobally(*prepared, scan.laser_pose);
+    if (hit) {
+      const bool confirmed =
+          hypothesis_ && [&] {
+            const Pose2 expected = hypothesis_->pose * between(hypothesis_->odometry_pose, predicted);
+            const Pose2 miss = between(expected, hit->pose);
+            return miss.translation().norm() <= options_.confirm_translation &&
+                   std::abs(miss.theta) <= options_.confirm_rotation;
+          }();
+      if (confirmed) {
+        pose_ = hit->pose;
+        cov_ = hit->cov;
+        localized_ = true;
+        failures_in_a_row_ = 0;
+        result.found = result.matched = true;
+        result.reference = references_[hit->reference].id;
+        ++stats_.fixes;
+        if (stats_.first_fix_scan < 0) stats_.first_fix_scan = static_cast<int64_t>(stats_.scans - 1);
+      } else {
+        if (hypothesis_) ++stats_.global_unconfirmed;
+        hypothesis_ = Hypothesis{hit->pose, predicted};
+      }
+    }
+  }
+  dead_reckoning_.push_back(predicted);
+  result.localized = localized_;
+  result.pose = {scan.utime, pose_, cov_};
+  record(scan.utime, result);
+  return result;
+}
+
+void MapLocalizer::record(int64_t utime, const MapLocalizationResult& result) {
+  const size_t index = online_.size();
+  if (result.matched) ++stats_.matched_scans;
+  if (!localized_) ++stats_.odometry_only_scans;
+  if (!localized_ && !lost_since_) lost_since_ = index;
+  if (result.found && lost_since_) {
+    stretches_.push_back({*lost_since_, index});
+    lost_since_.reset();
+  }
+  PoseStamped pose{utime, pose_, cov_};
+  online_.push_back(pose);
+  localized_flags_.push_back(localized_);
+}
+
+std::vector<PoseStamped> MapLocalizer::trajectory() const {
+  std::vector<PoseStamped> poses = online_;
+  for (const Stretch& s : stretches_) {
+    // Scans [first, last) had dead-reckoning poses; the fix at `last` places that chain.
+    const Pose2 anchor = online_[s.last].pose * dead_reckoning_[s.last].inverse();
+    for (size_t i = s.first; i < s.last; ++i) poses[i].pose = anchor * dead_reckoning_[i];
+  }
+  return poses;
+}
+
+}  // namespace polarslam

@@ -1,0 +1,147 @@
+#pragma once
+// Localisation in a stored PSM SLAM map (issue 15; docs/maps.md): the map's reference scans stay
+// fixed, nothing is added to them. Per scan the robot pose is predicted with odometry (the same
+// model as PSM SLAM's filter), matched by PSM against the nearest reference scans, and updated
+// with the best good match that passes the χ² gate: a 3-state EKF whose map is known.
+//
+// Global localisation. When the start is unknown, or the robot has been lost for
+// `lost_after_scans` scans in a row (kidnapped, or the odometry failed), every scan is matched
+// against the reference scans from several headings each (PSM converges from ±45° of heading
+// and from within about half the reference spacing). A hit is taken only when no other place
+// fits about as well (the loop-closure ambiguity rule) and the next search agrees with it after
+// the odometry in between: a look-alike corridor gives no hit rather than a wrong one. Until then
+// the poses are odometry only and flagged as such; once a fix is found, the final trajectory
+// re-places the scans since the loss by odometry from the fix.
+//
+//   MapLocalizer localizer(references, params);
+//   localizer.addOdometry(reading);
+//   MapLocalizationResult r = localizer.addScan(scan);   // r.localized, r.pose
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "geometry/features.hpp"
+#include "laser/laser_scan.hpp"
+#include "odometry/odometry_model.hpp"
+#include "scanmatch/prepared_scan.hpp"
+#include "scanmatch/scan_matcher.hpp"
+#include "slam/psm_slam_params.hpp"
+
+namespace polarslam {
+
+/// One reference scan of a map and the robot pose it was taken from, in the map frame.
+struct MapReference {
+  int64_t id = 0;
+  Pose2 pose;
+  LaserScan scan;
+};
+
+struct MapLocalizationResult {
+  PoseStamped pose;             ///< robot pose in the map frame (odometry only unless localized)
+  bool usable = false;          ///< the scan could be matched at all
+  bool localized = false;       ///< the pose is tied to the map (tracking)
+  bool matched = false;         ///< a match with the map updated the pose on this scan
+  bool found = false;           ///< the global search fixed the pose on this scan
+  int64_t reference = -1;       ///< the reference scan of the match, if any
+};
+
+struct MapLocalizerStats {
+  size_t scans = 0;
+  size_t unusable_scans = 0;
+  size_t matched_scans = 0;        ///< tracking: a match updated the pose
+  size_t odometry_only_scans = 0;  ///< not localized: pose from odometry alone
+  size_t match_failures = 0;       ///< tracking: no good match with any candidate
+  size_t gate_rejections = 0;      ///< tracking: good matches outside the χ² gate
+  size_t odometry_faults = 0;      ///< tracking: gated-out matches taken as odometry faults
+  size_t global_searches = 0;
+  size_t global_matches = 0;       ///< matches tried by the global searches
+  size_t global_ambiguous = 0;     ///< searches whose best hit had a look-alike elsewhere
+  size_t global_unconfirmed = 0;   ///< unambiguous hits the next search did not agree with
+  size_t fixes = 0;                ///< global searches that localized the robot
+  size_t losses = 0;               ///< times tracking was lost (kidnapping, odometry failure)
+  int64_t first_fix_scan = -1;     ///< scan index (0-based) of the first fix
+};
+
+class MapLocalizer {
+ public:
+  /// Throws std::invalid_argument when no reference scan is usable.
+  MapLocalizer(const std::vector<MapReference>& references, PsmSlamParams params);
+
+  /// A known start: tracking begins at `pose` (map frame) with covariance `cov`.
+  void setInitialPose(const Pose2& pose, const Mat3& cov);
+  /// Cumulative odometry; bad readings are counted by the integrator and ignored.
+  void addOdometry(const OdometryReading& reading);
+  /// One laser scan; never throws for bad content.
+  MapLocalizationResult addScan(const LaserScan& scan);
+
+  /// One pose per scan as published at scan time.
+  const std::vector<PoseStamped>& onlineTrajectory() const { return online_; }
+  /// One pose per scan, the odometry-only stretches re-placed from the fix that ended them.
+  std::vector<PoseStamped> trajectory() const;
+  /// Per scan: whether its online pose was tied to the map.
+  const std::vector<bool>& localizedFlags() const { return localized_flags_; }
+  const MapLocalizerStats& stats() const { return stats_; }
+  bool localized() const { return localized_; }
+  size_t referenceCount() const { return references_.size(); }
+
+ private:
+  struct Reference {
+    int64_t id = 0;
+    Pose2 pose;
+    Pose2 laser_mount;
+    PreparedScan scan;
+  };
+  /// A match of the current scan with one reference, as a robot pose in the map frame.
+  struct Fix {
+    size_t reference = 0;
+    Pose2 pose;
+    Mat3 cov = Mat3::Zero();
+    double error_index = 0.0;
+    double overlap = 0.0;
+  };
+  struct Hypothesis {
+    Pose2 pose;           ///< the hit's robot pose
+    Pose2 odometry_pose;  ///< the dead-reckoning pose at that scan
+  };
+  /// The odometry-only stretch a fix ended: scans [first, last) re-placed from scan `last`.
+  struct Stretch {
+    size_t first = 0, last = 0;
+  };
+
+  void predictTo(int64_t utime);
+  std::optional<Fix> match(size_t reference, const PreparedScan& scan, const Pose2& mount, const Pose2& relative_guess,
+                           bool wide);
+  bool goodFix(const Fix& fix, bool global) const;
+  /// Tracking: matches the nearest references and applies the best good match. True if applied.
+  bool track(const PreparedScan& scan, const Pose2& mount, MapLocalizationResult& result);
+  bool applyFix(const Fix& fix);
+  /// Global search: the unambiguous best hit of this scan, if any.
+  std::optional<Fix> searchGlobally(const PreparedScan& scan, const Pose2& mount);
+  void lose();
+  void record(int64_t utime, const MapLocalizationResult& result);
+
+  PsmSlamParams params_;
+  MapLocalizationParams options_;
+  ScanMatcher matcher_;
+  std::vector<Reference> references_;
+  OdometryIntegrator odometry_;
+  bool have_odometry_ = false;
+  Pose2 pending_motion_;
+  Mat3 pending_cov_ = Mat3::Zero();
+  std::optional<int64_t> last_utime_;
+
+  Pose2 pose_;                  ///< map frame when localized_, else dead reckoning since the loss
+  Mat3 cov_ = Mat3::Zero();
+  bool localized_ = false;
+  int failures_in_a_row_ = 0;
+  std::optional<Hypothesis> hypothesis_;
+  std::optional<size_t> lost_since_;  ///< first scan of the current odometry-only stretch
+
+  std::vector<PoseStamped> online_;
+  std::vector<bool> localized_flags_;
+  std::vector<Pose2> dead_reckoning_;  ///< per scan: the odometry-only pose chain
+  std::vector<Stretch> stretches_;
+  MapLocalizerStats stats_;
+};
+
+}  // namespace polarslam

@@ -1,0 +1,67 @@
+// polarslam run --load-map M --mode localize (issue 15, item 2) end to end: the default log's
+// map saved by one run, the same log localised in it from a known start by another, and the
+// option mistakes a user can make refused with a message.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "child_process.hpp"
+
+using namespace std::chrono_literals;
+using polarslam::testing::binPath;
+using polarslam::testing::readFile;
+using polarslam::testing::runToEnd;
+using polarslam::testing::sourcePath;
+
+namespace {
+namespace fs = std::filesystem;
+
+TEST(LocalizeCli, TheDefaultLogLocalisesInItsOwnSavedMapAndBadOptionsAreRefused) {
+  const fs::path dir = fs::temp_directory_path() / ("polarslam-localize-it-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string log = sourcePath("logs/office.lcmlog"), config = sourcePath("config/psm-slam.yaml");
+  const std::string map = (dir / "map").string();
+  ASSERT_EQ(runToEnd({binPath("polarslam"), "run", "--log", log, "--pipeline", "psm-slam", "--config", config,
+                      "--save-map", map, "--out", (dir / "mapping").string()},
+                     dir / "mapping.out", 300s),
+            0)
+      << readFile(dir / "mapping.out");
+
+  ASSERT_EQ(runToEnd({binPath("polarslam"), "run", "--log", log, "--pipeline", "psm-slam", "--config", config,
+                      "--load-map", map, "--initial-pose", "0,0,0", "--out", (dir / "localize").string()},
+                     dir / "localize.out", 300s),
+            0)
+      << readFile(dir / "localize.out");
+  std::ifstream in(dir / "localize" / "report.json");
+  const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
+  ASSERT_TRUE(report.contains("localization")) << report.dump(2);
+  const auto& loc = report["localization"];
+  EXPECT_EQ(loc["global_searches"], 0) << "a known start needs no search";
+  EXPECT_EQ(loc["losses"], 0);
+  EXPECT_GT(loc["matched_scans"].get<int>(), 0.9 * loc["scans"].get<int>()) << loc.dump(2);
+  EXPECT_LT(report["ate_rmse_m"].get<double>(), 0.10) << "the map's frame is the mapping run's start frame";
+  EXPECT_TRUE(fs::exists(dir / "localize" / "map.png"));
+  EXPECT_TRUE(fs::exists(dir / "localize" / "trajectory.tum"));
+
+  const std::vector<std::pair<std::vector<std::string>, std::string>> mistakes{
+      {{"--pipeline", "psm-slam", "--load-map", map, "--initial-pose", "1,2"}, "expected x,y,theta"},
+      {{"--pipeline", "ekf", "--load-map", map}, "--load-map goes with --pipeline psm-slam"},
+      {{"--pipeline", "psm-slam", "--initial-pose", "0,0,0"}, "--initial-pose goes with --load-map"},
+      {{"--pipeline", "psm-slam", "--load-map", map, "--save-map", (dir / "other").string()}, "no --save-map"},
+      {{"--pipeline", "psm-slam", "--load-map", (dir / "mapping").string()}, "manifest.json"},
+  };
+  for (const auto& [options, message] : mistakes) {
+    std::vector<std::string> argv{binPath("polarslam"), "run", "--log", log, "--out", (dir / "refused").string()};
+    argv.insert(argv.end(), options.begin(), options.end());
+    EXPECT_NE(runToEnd(argv, dir / "refused.out", 60s), 0) << message;
+    EXPECT_NE(readFile(dir / "refused.out").find(message), std::string::npos) << readFile(dir / "refused.out");
+    EXPECT_FALSE(fs::exists(dir / "refused")) << message;
+  }
+  if (!::testing::Test::HasFailure()) fs::remove_all(dir);
+}
+
+}  // namespace

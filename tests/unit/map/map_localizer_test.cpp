@@ -1,0 +1,174 @@
+// Localisation in a stored map (issue 15, items 2-3): a simulated corridor loop is mapped once,
+// then other runs in the same building are localised in that map: from an unknown start, and
+// after the robot is carried elsewhere (kidnapped) while its odometry noticed nothing.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <optional>
+#include <random>
+
+#include "map/map_store.hpp"
+#include "pipeline/psm_slam_estimator.hpp"
+#include "slam/map_localizer.hpp"
+#include "unit/slam/synthetic_run.hpp"
+
+namespace polarslam {
+namespace {
+
+using testing::SyntheticRun;
+using testing::SyntheticRunOptions;
+
+PsmSlamEstimatorConfig testConfig() {
+  PsmSlamEstimatorConfig c;
+  c.slam.odometry.poses.k_distance = 4e-4;  // the simulated odometry's noise (synthetic_run.hpp)
+  c.slam.odometry.poses.k_heading_per_rad = 1e-4;
+  c.slam.odometry.poses.k_heading_per_m = 2e-4;
+  return c;
+}
+
+std::vector<MapReference> mapOfOneLap() {
+  SyntheticRunOptions options;
+  options.seed = 7;
+  const SyntheticRun run = testing::simulateLoopRun(testing::makeLoopWorld(), options);
+  PsmSlamEstimator mapping(testConfig());
+  for (size_t k = 0; k < run.scans.size(); ++k) {
+    mapping.onOdometry(run.odometry[k]);
+    mapping.onLaser(run.scans[k]);
+  }
+  nlohmann::json report;
+  mapping.finish("", report);
+  return mapReferences(mapping.storedMap());
+}
+
+/// The loop's true path in the world (the mapping run started at its first pose).
+std::vector<Pose2> loopPathInWorld(int laps) {
+  SyntheticRunOptions options;
+  options.laps = laps;
+  return testing::loopPath(options);
+}
+
+/// A run along `path` (world poses) whose odometry sees every step but `hidden_step` (the kidnap:
+/// the robot was carried, the wheels did not turn), moved by `odometry_frame`. Its truth is in
+/// the map frame: the world seen from where the mapping run started.
+SyntheticRun runAlong(const std::vector<Pose2>& path, size_t hidden_step, const Pose2& odometry_frame, uint64_t seed) {
+  const Pose2 map_from_world = loopPathInWorld(1).front().inverse();
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  SyntheticRunOptions options;
+  const World world = testing::makeLoopWorld();
+  SyntheticRun run;
+  Pose2 odometry = odometry_frame;
+  const int64_t t0 = 2'000'000'000'000'000, period = 200'000;
+  for (size_t k = 0; k < path.size(); ++k) {
+    if (k > 0 && k != hidden_step) {
+      Pose2 step = between(path[k - 1], path[k]);
+      const double distance = step.translation().norm();
+      step.x += options.odometry_sigma_per_m * std::sqrt(distance) * unit(rng);
+      step.theta += options.odometry_heading_sigma * std::sqrt(distance + std::abs(step.theta)) * unit(rng) +
+                    options.heading_bias_per_m * distance;
+      odometry = odometry * step;
+    }
+    const int64_t utime = t0 + static_cast<int64_t>(k) * period;
+    run.odometry.push_back({utime, static_cast<int64_t>(k), odometry, Mat3::Zero(), 0.0, 0.0, 0.0, 0.0});
+    run.scans.push_back(testing::castScan(world, path[k], options, rng, utime));
+    run.truth.push_back(map_from_world * path[k]);
+  }
+  return run;
+}
+
+struct Localised {
+  std::vector<MapLocalizationResult> results;
+  MapLocalizerStats stats;
+};
+
+Localised localise(const std::vector<MapReference>& map, const SyntheticRun& run) {
+  MapLocalizer localizer(map, testConfig().slam);
+  Localised out;
+  for (size_t k = 0; k < run.scans.size(); ++k) {
+    localizer.addOdometry(run.odometry[k]);
+    out.results.push_back(localizer.addScan(run.scans[k]));
+  }
+  out.stats = localizer.stats();
+  return out;
+}
+
+double distance(const Pose2& a, const Pose2& b) { return (a.translation() - b.translation()).norm(); }
+
+// The loop is nearly symmetric: the global search refuses look-alike places until one fits
+// unambiguously (issue 15's goal of a fix within 10 scans is not met yet: printed, not asserted).
+TEST(MapLocalizer, FindsAnUnknownStartAndThenTracksTheMap) {
+  const std::vector<MapReference> map = mapOfOneLap();
+  std::vector<Pose2> path = loopPathInWorld(2);
+  path.erase(path.begin(), path.begin() + 40);  // starts somewhere along the loop, not at the map's origin
+  const SyntheticRun run = runAlong(path, 0, Pose2(150.0, -80.0, 2.5), 21);
+  const Localised loc = localise(map, run);
+  ASSERT_GE(loc.stats.first_fix_scan, 0) << "never found";
+  std::printf("unknown start found at scan %lld (%zu ambiguous searches)\n",
+              static_cast<long long>(loc.stats.first_fix_scan), loc.stats.global_ambiguous);
+  for (size_t k = 0; k < run.scans.size(); ++k) {
+    EXPECT_EQ(loc.results[k].localized, k >= static_cast<size_t>(loc.stats.first_fix_scan)) << "scan " << k;
+    if (loc.results[k].localized) {
+      EXPECT_LT(distance(loc.results[k].pose.pose, run.truth[k]), 0.10) << "m from the truth at scan " << k;
+    }
+  }
+  EXPECT_EQ(loc.stats.losses, 0u);
+}
+
+TEST(MapLocalizer, AKnownStartTracksFromTheFirstScanWithoutSearching) {
+  const std::vector<MapReference> map = mapOfOneLap();
+  const std::vector<Pose2> path = loopPathInWorld(1);
+  const SyntheticRun run = runAlong(path, 0, Pose2(), 22);
+  MapLocalizer localizer(map, testConfig().slam);
+  localizer.setInitialPose(run.truth.front(), Vec3(0.01, 0.01, 1e-4).asDiagonal());
+  double worst = 0.0;
+  for (size_t k = 0; k < run.scans.size(); ++k) {
+    localizer.addOdometry(run.odometry[k]);
+    const Pose2 got = localizer.addScan(run.scans[k]).pose.pose;
+    if (distance(got, run.truth[k]) > 0.1) ADD_FAILURE() << k << " got " << got.x << "," << got.y << " truth " << run.truth[k].x << "," << run.truth[k].y;
+    worst = std::max(worst, distance(got, run.truth[k]));
+  }
+  EXPECT_EQ(localizer.stats().global_searches, 0u);
+  EXPECT_LT(worst, 0.10);
+}
+
+// 20 seeds: the robot is carried 4-12 m along the loop mid-run while its odometry notices nothing.
+// The localiser notices (along a look-alike corridor it may take a few dozen scans), flags its
+// poses as odometry only, and no fix, ever,
+// is more than 0.3 m from the truth (no wrong lock-on). How soon it is found again is printed
+// (issue 15's goal, within 20 scans, is not met on every seed yet).
+TEST(MapLocalizer, AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace) {
+  const std::vector<MapReference> map = mapOfOneLap();
+  const std::vector<Pose2> path = loopPathInWorld(3);
+  std::mt19937_64 pick(15);
+  size_t found_within_20 = 0, latest_notice = 0;
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    const size_t kidnap = 60 + pick() % 40, carried = 40 + pick() % 80;  // scans of the path skipped: 4-12 m
+    std::vector<Pose2> truth(path.begin(), path.begin() + static_cast<long>(kidnap));
+    truth.insert(truth.end(), path.begin() + static_cast<long>(kidnap + carried),
+                 path.begin() + static_cast<long>(std::min(path.size(), kidnap + carried + 150)));
+    const SyntheticRun run = runAlong(truth, kidnap, Pose2(), 100 + seed);
+    MapLocalizer localizer(map, testConfig().slam);
+    localizer.setInitialPose(run.truth.front(), Vec3(0.01, 0.01, 1e-4).asDiagonal());
+    std::optional<size_t> noticed, found_again;
+    for (size_t k = 0; k < run.scans.size(); ++k) {
+      localizer.addOdometry(run.odometry[k]);
+      const MapLocalizationResult r = localizer.addScan(run.scans[k]);
+      if (k < kidnap) {
+        EXPECT_TRUE(r.localized) << "seed " << seed << ", scan " << k;
+      }
+      if (k >= kidnap && !r.localized && !noticed) noticed = k;
+      if (r.found) {
+        EXPECT_LT(distance(r.pose.pose, run.truth[k]), 0.3) << "seed " << seed << ": a wrong lock-on at scan " << k;
+        if (k >= kidnap && !found_again) found_again = k;
+      }
+    }
+    ASSERT_TRUE(noticed) << "seed " << seed << ": the kidnap at scan " << kidnap << " went unnoticed";
+    latest_notice = std::max(latest_notice, *noticed - kidnap);
+    if (found_again && *found_again - kidnap <= 20) ++found_within_20;
+  }
+  std::printf("kidnap noticed within %zu scans on every seed; found again within 20 scans on %zu of 20 seeds\n",
+              latest_notice, found_within_20);
+}
+
+}  // namespace
+}  // namespace polarslam
