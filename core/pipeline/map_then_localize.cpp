@@ -9,7 +9,8 @@
 namespace polarslam {
 
 MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, int64_t split_utime,
-                                      const Pose2& odometry_moved_by, const PsmSlamEstimatorConfig& config) {
+                                      const Pose2& odometry_moved_by, const PsmSlamEstimatorConfig& config,
+                                      bool known_start) {
   MapThenLocalizeResult result;
   PsmSlamEstimator mapping(config);
   for (const CarmenEvent& e : events) {
@@ -25,6 +26,7 @@ MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, in
 
   const auto start = std::chrono::steady_clock::now();
   MapLocalizer localizer(references, config.slam);
+  if (known_start && !result.mapped.empty()) localizer.setInitialPose(result.mapped.back().pose, result.mapped.back().cov);
   int64_t first = 0, last = 0;
   for (const CarmenEvent& e : events) {
     if (e.utime() < split_utime) continue;
@@ -41,6 +43,8 @@ MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, in
   result.localize_seconds = secondsSince(start);
   result.localized_duration_s = 1e-6 * static_cast<double>(last - first);
   result.localized = localizer.trajectory();
+  result.online = localizer.onlineTrajectory();
+  result.tied_to_map = localizer.localizedFlags();
   result.stats = localizer.stats();
   result.joined = result.mapped;
   result.joined.insert(result.joined.end(), result.localized.begin(), result.localized.end());

@@ -18,6 +18,8 @@ struct MapThenLocalizeResult {
   std::vector<PoseStamped> mapped;     ///< final SLAM poses of the scans before the split
   std::vector<PoseStamped> localized;  ///< final localised poses after the split, map frame
   std::vector<PoseStamped> joined;     ///< both, in time order
+  std::vector<PoseStamped> online;     ///< localised part as published at scan time
+  std::vector<bool> tied_to_map;       ///< per online pose: localised (not odometry only)
   MapLocalizerStats stats;
   size_t reference_scans = 0;
   double localize_seconds = 0.0;       ///< inside the localiser (the map loaded, scans prepared)
@@ -25,7 +27,9 @@ struct MapThenLocalizeResult {
 };
 
 /// `odometry_moved_by`: the rigid transform applied to every odometry reading after the split.
+/// `known_start`: localisation starts from the mapping's last pose instead of searching.
 MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, int64_t split_utime,
-                                      const Pose2& odometry_moved_by, const PsmSlamEstimatorConfig& config);
+                                      const Pose2& odometry_moved_by, const PsmSlamEstimatorConfig& config,
+                                      bool known_start = false);
 
 }  // namespace polarslam

@@ -35,6 +35,13 @@ MapLocalizer::MapLocalizer(const std::vector<MapReference>& references, PsmSlamP
     references_.push_back({r.id, r.pose, r.scan.laser_pose, std::move(*prepared)});
   }
   if (references_.empty()) throw std::invalid_argument("the map has no usable reference scan to localise against");
+  std::vector<LaserScan> scans;
+  std::vector<Pose2> poses;
+  for (const MapReference& r : references) {
+    scans.push_back(r.scan);
+    poses.push_back(r.pose);
+  }
+  field_.emplace(scans, poses, params_.psm.max_range, options_.global_fit_distance);
 }
 
 void MapLocalizer::setInitialPose(const Pose2& pose, const Mat3& cov) {
@@ -103,14 +110,18 @@ bool MapLocalizer::goodFix(const Fix& fix, bool global) const {
          fix.cov.allFinite();
 }
 
+bool MapLocalizer::withinOdometryFault(const Pose2& from, const Pose2& to) const {
+  const Pose2 miss = between(from, to);
+  return miss.translation().norm() <= params_.max_odometry_fault_translation &&
+         std::abs(miss.theta) <= params_.max_odometry_fault_rotation;
+}
+
 bool MapLocalizer::applyFix(const Fix& fix) {
   Vec3 nu = poseDifference(fix.pose, pose_);
   Mat3 S = cov_ + fix.cov;
   double chi2 = nu.dot(S.ldlt().solve(nu));
   if (!(chi2 <= params_.chi2_gate)) {
-    const Pose2 miss = between(pose_, fix.pose);
-    if (miss.translation().norm() > params_.max_odometry_fault_translation ||
-        std::abs(miss.theta) > params_.max_odometry_fault_rotation) {
+    if (!withinOdometryFault(pose_, fix.pose) && !withinOdometryFault(constantVelocityPose(), fix.pose)) {
       ++stats_.gate_rejections;
       return false;
     }
@@ -138,12 +149,18 @@ bool MapLocalizer::track(const PreparedScan& scan, const Pose2& mount, MapLocali
   }
   const size_t keep = std::min(nearest.size(), static_cast<size_t>(options_.track_candidates));
   std::partial_sort(nearest.begin(), nearest.begin() + static_cast<long>(keep), nearest.end());
+  std::vector<Pose2> priors{pose_};
+  const Pose2 disagreement = between(pose_, constantVelocityPose());
+  if (have_odometry_ && (disagreement.translation().norm() >= params_.odometry_check_translation ||
+                         std::abs(disagreement.theta) >= params_.odometry_check_rotation))
+    priors.push_back(constantVelocityPose());
   std::optional<Fix> best;
-  for (size_t k = 0; k < keep; ++k) {
-    const size_t i = nearest[k].second;
-    std::optional<Fix> fix = match(i, scan, mount, between(references_[i].pose, pose_), false);
-    if (fix && goodFix(*fix, false) && (!best || fix->error_index < best->error_index)) best = fix;
-  }
+  for (size_t k = 0; k < keep; ++k)
+    for (const Pose2& prior : priors) {
+      const size_t i = nearest[k].second;
+      std::optional<Fix> fix = match(i, scan, mount, between(references_[i].pose, prior), false);
+      if (fix && goodFix(*fix, false) && (!best || fix->error_index < best->error_index)) best = fix;
+    }
   if (!best) {
     ++stats_.match_failures;
     return false;
@@ -154,7 +171,8 @@ bool MapLocalizer::track(const PreparedScan& scan, const Pose2& mount, MapLocali
   return true;
 }
 
-std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const PreparedScan& scan, const Pose2& mount) {
+std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& raw, const PreparedScan& scan) {
+  const Pose2& mount = raw.laser_pose;
   ++stats_.global_searches;
   std::vector<Fix> hits;
   const int headings = std::max(1, options_.global_headings);
@@ -163,16 +181,27 @@ std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const PreparedScan
       ++stats_.global_matches;
       const Pose2 guess(0.0, 0.0, wrapAngle(2.0 * M_PI * h / headings));
       std::optional<Fix> fix = match(i, scan, mount, guess, true);
-      if (fix && goodFix(*fix, true)) hits.push_back(*fix);
+      if (!fix || !goodFix(*fix, true)) continue;
+      fix->fit = field_->fit(raw, fix->pose);
+      if (fix->fit < options_.global_min_fit) continue;
+      if (field_->seeThrough(raw, fix->pose, options_.global_see_through_clearance) > options_.global_max_see_through) {
+        ++stats_.global_see_through;
+        continue;
+      }
+      hits.push_back(*fix);
     }
   if (hits.empty()) return std::nullopt;
-  const auto best = std::min_element(hits.begin(), hits.end(),
-                                     [](const Fix& a, const Fix& b) { return a.error_index < b.error_index; });
+  // PSM's error index rates the associated readings only: a corridor matched the wrong way round
+  // can have a smaller one at half the overlap. The fit of the whole scan to the map tells them apart.
+  const auto best = std::max_element(hits.begin(), hits.end(), [](const Fix& a, const Fix& b) {
+    return a.fit < b.fit || (a.fit == b.fit && a.error_index > b.error_index);
+  });
+  if (best->fit < options_.global_min_fit) return std::nullopt;
   for (const Fix& other : hits) {
     const Pose2 apart = between(best->pose, other.pose);
     const bool elsewhere = apart.translation().norm() > options_.global_ambiguity_distance ||
                            std::abs(apart.theta) > params_.loop_ambiguity_heading;
-    if (elsewhere && other.error_index <= options_.global_ambiguity_ratio * best->error_index) {
+    if (elsewhere && other.fit >= best->fit - options_.global_fit_margin) {
       ++stats_.global_ambiguous;
       return std::nullopt;
     }
@@ -196,7 +225,13 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
     ++stats_.unusable_scans;
   } else if (localized_) {
     result.usable = true;
-    failures_in_a_row_ = track(*prepared, scan.laser_pose, result) ? 0 : failures_in_a_row_ + 1;
+    // A match can hold on to a look-alike stretch of corridor after a kidnap; what the scan sees
+    // beyond the walls then contradicts the map, and that counts as a failure too.
+    const bool tracked = track(*prepared, scan.laser_pose, result) &&
+                         field_->seeThrough(scan, pose_, options_.global_see_through_clearance) <=
+                             options_.global_max_see_through;
+    if (!tracked && result.matched) ++stats_.see_through_while_tracking;
+    failures_in_a_row_ = tracked ? 0 : failures_in_a_row_ + 1;
     if (failures_in_a_row_ >= options_.lost_after_scans) {
       lose();
       // The scans of the failed run had odometry-only poses already: re-placed with the rest.
@@ -205,7 +240,7 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
     }
   } else {
     result.usable = true;
-    std::optional<Fix> hit = searchGlobally(*prepared, scan.laser_pose);
+    std::optional<Fix> hit = searchGlobally(scan, *prepared);
     if (hit) {
       const bool confirmed =
           hypothesis_ && [&] {
@@ -230,6 +265,8 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
     }
   }
   dead_reckoning_.push_back(predicted);
+  last_scan_motion_ = result.found ? Pose2() : between(last_scan_pose_, pose_);  // a fix is not a motion
+  last_scan_pose_ = pose_;
   result.localized = localized_;
   result.pose = {scan.utime, pose_, cov_};
   record(scan.utime, result);

@@ -25,6 +25,7 @@
 #include "odometry/odometry_model.hpp"
 #include "scanmatch/prepared_scan.hpp"
 #include "scanmatch/scan_matcher.hpp"
+#include "slam/map_fit_field.hpp"
 #include "slam/psm_slam_params.hpp"
 
 namespace polarslam {
@@ -53,9 +54,11 @@ struct MapLocalizerStats {
   size_t match_failures = 0;       ///< tracking: no good match with any candidate
   size_t gate_rejections = 0;      ///< tracking: good matches outside the χ² gate
   size_t odometry_faults = 0;      ///< tracking: gated-out matches taken as odometry faults
+  size_t see_through_while_tracking = 0;  ///< tracking: matched, but seeing through mapped walls
   size_t global_searches = 0;
   size_t global_matches = 0;       ///< matches tried by the global searches
   size_t global_ambiguous = 0;     ///< searches whose best hit had a look-alike elsewhere
+  size_t global_see_through = 0;   ///< hits refused for seeing through mapped walls
   size_t global_unconfirmed = 0;   ///< unambiguous hits the next search did not agree with
   size_t fixes = 0;                ///< global searches that localized the robot
   size_t losses = 0;               ///< times tracking was lost (kidnapping, odometry failure)
@@ -98,6 +101,7 @@ class MapLocalizer {
     Mat3 cov = Mat3::Zero();
     double error_index = 0.0;
     double overlap = 0.0;
+    double fit = 0.0;     ///< of the whole scan to the map at `pose` (global search)
   };
   struct Hypothesis {
     Pose2 pose;           ///< the hit's robot pose
@@ -115,8 +119,12 @@ class MapLocalizer {
   /// Tracking: matches the nearest references and applies the best good match. True if applied.
   bool track(const PreparedScan& scan, const Pose2& mount, MapLocalizationResult& result);
   bool applyFix(const Fix& fix);
+  /// Where the robot would be had it kept the motion between the last two scans (real odometry
+  /// goes stale and catches up in one jump; PSM SLAM matches from this prior too).
+  Pose2 constantVelocityPose() const { return last_scan_pose_ * last_scan_motion_; }
+  bool withinOdometryFault(const Pose2& from, const Pose2& to) const;
   /// Global search: the unambiguous best hit of this scan, if any.
-  std::optional<Fix> searchGlobally(const PreparedScan& scan, const Pose2& mount);
+  std::optional<Fix> searchGlobally(const LaserScan& raw, const PreparedScan& scan);
   void lose();
   void record(int64_t utime, const MapLocalizationResult& result);
 
@@ -124,12 +132,14 @@ class MapLocalizer {
   MapLocalizationParams options_;
   ScanMatcher matcher_;
   std::vector<Reference> references_;
+  std::optional<MapFitField> field_;
   OdometryIntegrator odometry_;
   bool have_odometry_ = false;
   Pose2 pending_motion_;
   Mat3 pending_cov_ = Mat3::Zero();
   std::optional<int64_t> last_utime_;
 
+  Pose2 last_scan_pose_, last_scan_motion_;
   Pose2 pose_;                  ///< map frame when localized_, else dead reckoning since the loss
   Mat3 cov_ = Mat3::Zero();
   bool localized_ = false;

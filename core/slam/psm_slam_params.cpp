@@ -110,8 +110,13 @@ void describeLocalization(ParameterTable& t, MapLocalizationParams& p) {
   t.integer("lost_after_scans", p.lost_after_scans, 1, 100000, "scans without a match: lost, search globally");
   t.integer("global_headings", p.global_headings, 1, 360, "headings tried per reference scan in a global search");
   t.number("global_min_overlap", p.global_min_overlap, 0.0, 1.0, "associated fraction of a global hit at least");
+  t.number("global_fit_distance", p.global_fit_distance, 0.001, 10.0, "m: a reading this close to the map fits");
+  t.number("global_min_fit", p.global_min_fit, 0.0, 1.0, "fraction of the scan the best hit fits at least");
+  t.number("global_max_see_through", p.global_max_see_through, 0.0, 1.0, "fraction of rays through mapped walls at most");
+  t.number("global_see_through_clearance", p.global_see_through_clearance, 0.0, 100.0,
+           "m from either end of a ray not checked");
   t.number("global_ambiguity_distance", p.global_ambiguity_distance, 0.0, 1000.0, "m: another hit this far away ...");
-  t.number("global_ambiguity_ratio", p.global_ambiguity_ratio, 1.0, 1000.0, "... this nearly as good: no fix");
+  t.number("global_fit_margin", p.global_fit_margin, 0.0, 1.0, "... fitting within this of the best: no fix");
   t.number("confirm_translation", p.confirm_translation, 0.0, 100.0, "m: two hits agree after the odometry");
   t.angle("confirm_rotation_deg", p.confirm_rotation, 0.0, 180.0, "the same for heading");
 }

@@ -25,10 +25,19 @@ struct MapLocalizationParams {
   int global_headings = 6;
   /// A hit needs this overlap (stricter than tracking) and loop_max_error_index.
   double global_min_overlap = 0.5;
-  /// Another hit more than global_ambiguity_distance (or loop_ambiguity_heading) away with an
-  /// error index within global_ambiguity_ratio of the best makes the search ambiguous: no fix.
+  /// Hits are ranked by how well the whole scan fits the map there (map_fit_field.hpp): the
+  /// fraction of readings within global_fit_distance of a map point. The best needs at least
+  /// global_min_fit; another hit more than global_ambiguity_distance (or loop_ambiguity_heading)
+  /// away that fits within global_fit_margin of it makes the search ambiguous: no fix.
+  double global_fit_distance = 0.1;      ///< m
+  double global_min_fit = 0.7;
+  double global_fit_margin = 0.1;
+  /// A hit whose rays cross the map more than global_see_through_clearance before their
+  /// endpoints (seeing through a mapped wall) on more than this fraction of the scan is refused;
+  /// a tracked pose that does so counts as a tracking failure.
+  double global_max_see_through = 0.1;
+  double global_see_through_clearance = 0.5;  ///< m
   double global_ambiguity_distance = 0.5;  ///< m
-  double global_ambiguity_ratio = 2.0;
   /// The hit of the next search must agree with the previous one after the odometry in between.
   double confirm_translation = 0.15;     ///< m
   double confirm_rotation = deg2rad(5.0);
