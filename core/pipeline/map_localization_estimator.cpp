@@ -43,6 +43,7 @@ void MapLocalizationEstimator::finish(const std::string& out_dir, nlohmann::json
                             {"global_matches", s.global_matches},
                             {"global_ambiguous", s.global_ambiguous},
                             {"global_see_through", s.global_see_through},
+                            {"global_unsupported", s.global_unsupported},
                             {"global_unconfirmed", s.global_unconfirmed},
                             {"fixes", s.fixes},
                             {"losses", s.losses},

@@ -197,6 +197,17 @@ std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& r
     return a.fit < b.fit || (a.fit == b.fit && a.error_index > b.error_index);
   });
   if (best->fit < options_.global_min_fit) return std::nullopt;
+  std::vector<size_t> supporting;
+  for (const Fix& other : hits) {
+    const Pose2 apart = between(best->pose, other.pose);
+    if (apart.translation().norm() <= options_.confirm_translation && std::abs(apart.theta) <= options_.confirm_rotation &&
+        std::find(supporting.begin(), supporting.end(), other.reference) == supporting.end())
+      supporting.push_back(other.reference);
+  }
+  if (supporting.size() < static_cast<size_t>(options_.global_min_support)) {
+    ++stats_.global_unsupported;
+    return std::nullopt;
+  }
   for (const Fix& other : hits) {
     const Pose2 apart = between(best->pose, other.pose);
     const bool elsewhere = apart.translation().norm() > options_.global_ambiguity_distance ||

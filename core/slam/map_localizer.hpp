@@ -59,6 +59,7 @@ struct MapLocalizerStats {
   size_t global_matches = 0;       ///< matches tried by the global searches
   size_t global_ambiguous = 0;     ///< searches whose best hit had a look-alike elsewhere
   size_t global_see_through = 0;   ///< hits refused for seeing through mapped walls
+  size_t global_unsupported = 0;   ///< searches whose best hit too few reference scans found
   size_t global_unconfirmed = 0;   ///< unambiguous hits the next search did not agree with
   size_t fixes = 0;                ///< global searches that localized the robot
   size_t losses = 0;               ///< times tracking was lost (kidnapping, odometry failure)

@@ -115,6 +115,7 @@ void describeLocalization(ParameterTable& t, MapLocalizationParams& p) {
   t.number("global_max_see_through", p.global_max_see_through, 0.0, 1.0, "fraction of rays through mapped walls at most");
   t.number("global_see_through_clearance", p.global_see_through_clearance, 0.0, 100.0,
            "m from either end of a ray not checked");
+  t.integer("global_min_support", p.global_min_support, 1, 1000, "reference scans that must find the best hit");
   t.number("global_ambiguity_distance", p.global_ambiguity_distance, 0.0, 1000.0, "m: another hit this far away ...");
   t.number("global_fit_margin", p.global_fit_margin, 0.0, 1.0, "... fitting within this of the best: no fix");
   t.number("confirm_translation", p.confirm_translation, 0.0, 100.0, "m: two hits agree after the odometry");

@@ -107,8 +107,8 @@ int main(int argc, char** argv) {
   std::printf("%-44s %10zu %10s\n", "fixes in mapped places", fixes_in_mapped, "");
   std::printf("%-44s %10zu %10s\n", "fixes in places not in the map (wrong)", fixes_elsewhere, "0");
   std::printf("counts: %zu matched, %zu odometry-only, %zu match failures, %zu gate rejections, %zu global searches "
-              "(%zu matches, %zu ambiguous, %zu hits seeing through walls, %zu unconfirmed), %zu fixes, %zu losses\n",
+              "(%zu matches, %zu ambiguous, %zu hits seeing through walls, %zu unsupported, %zu unconfirmed), %zu fixes, %zu losses\n",
               s.matched_scans, s.odometry_only_scans, s.match_failures, s.gate_rejections, s.global_searches,
-              s.global_matches, s.global_ambiguous, s.global_see_through, s.global_unconfirmed, s.fixes, s.losses);
+              s.global_matches, s.global_ambiguous, s.global_see_through, s.global_unsupported, s.global_unconfirmed, s.fixes, s.losses);
   return 0;
 }
