@@ -38,7 +38,6 @@ void MapLocalizationEstimator::finish(const std::string& out_dir, nlohmann::json
                             {"match_failures", s.match_failures},
                             {"gate_rejections", s.gate_rejections},
                             {"odometry_faults", s.odometry_faults},
-                            {"see_through_while_tracking", s.see_through_while_tracking},
                             {"global_searches", s.global_searches},
                             {"global_matches", s.global_matches},
                             {"global_ambiguous", s.global_ambiguous},

@@ -236,13 +236,7 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
     ++stats_.unusable_scans;
   } else if (localized_) {
     result.usable = true;
-    // A match can hold on to a look-alike stretch of corridor after a kidnap; what the scan sees
-    // beyond the walls then contradicts the map, and that counts as a failure too.
-    const bool tracked = track(*prepared, scan.laser_pose, result) &&
-                         field_->seeThrough(scan, pose_, options_.global_see_through_clearance) <=
-                             options_.global_max_see_through;
-    if (!tracked && result.matched) ++stats_.see_through_while_tracking;
-    failures_in_a_row_ = tracked ? 0 : failures_in_a_row_ + 1;
+    failures_in_a_row_ = track(*prepared, scan.laser_pose, result) ? 0 : failures_in_a_row_ + 1;
     if (failures_in_a_row_ >= options_.lost_after_scans) {
       lose();
       // The scans of the failed run had odometry-only poses already: re-placed with the rest.

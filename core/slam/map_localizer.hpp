@@ -54,7 +54,6 @@ struct MapLocalizerStats {
   size_t match_failures = 0;       ///< tracking: no good match with any candidate
   size_t gate_rejections = 0;      ///< tracking: good matches outside the χ² gate
   size_t odometry_faults = 0;      ///< tracking: gated-out matches taken as odometry faults
-  size_t see_through_while_tracking = 0;  ///< tracking: matched, but seeing through mapped walls
   size_t global_searches = 0;
   size_t global_matches = 0;       ///< matches tried by the global searches
   size_t global_ambiguous = 0;     ///< searches whose best hit had a look-alike elsewhere

@@ -33,8 +33,8 @@ struct MapLocalizationParams {
   double global_min_fit = 0.7;
   double global_fit_margin = 0.1;
   /// A hit whose rays cross the map more than global_see_through_clearance before their
-  /// endpoints (seeing through a mapped wall) on more than this fraction of the scan is refused;
-  /// a tracked pose that does so counts as a tracking failure.
+  /// endpoints (seeing through a mapped wall) on more than this fraction of the scan is refused.
+  /// (Not applied to tracking: rays grazing door jambs would count, and a tracked pose is local.)
   double global_max_see_through = 0.1;
   double global_see_through_clearance = 0.5;  ///< m
   /// The best hit must be found from at least this many different reference scans (within
