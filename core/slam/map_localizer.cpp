@@ -1,5 +1,7 @@
 #include "slam/map_localizer.hpp"
 
+#include "slam/psm_match.hpp"
+
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
@@ -10,37 +12,27 @@
 namespace polarslam {
 namespace {
 
-bool finitePose(const Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
-
 Vec3 poseDifference(const Pose2& a, const Pose2& b) { return {a.x - b.x, a.y - b.y, wrapAngle(a.theta - b.theta)}; }
 
-std::optional<PreparedScan> prepareUsable(const LaserScan& scan, const PsmParams& params) {
-  if (!validateScan(scan).empty()) return std::nullopt;
-  try {
-    PreparedScan prepared = prepareScan(scan, params);
-    if (prepared.valid_count < params.min_valid_points) return std::nullopt;
-    return prepared;
-  } catch (const std::exception&) {
-    return std::nullopt;
-  }
+/// Whether `b` lies within `translation` and `rotation` of `a` (in a's frame).
+bool near(const Pose2& a, const Pose2& b, double translation, double rotation) {
+  const Pose2 apart = between(a, b);
+  return apart.translation().norm() <= translation && std::abs(apart.theta) <= rotation;
 }
 
 }  // namespace
 
 MapLocalizer::MapLocalizer(const std::vector<MapReference>& references, PsmSlamParams params)
     : params_(std::move(params)), options_(params_.localization), matcher_(params_.psm), odometry_(params_.odometry) {
-  for (const MapReference& r : references) {
-    std::optional<PreparedScan> prepared = prepareUsable(r.scan, params_.psm);
-    if (!prepared || !finitePose(r.pose)) continue;
-    references_.push_back({r.id, r.pose, r.scan.laser_pose, std::move(*prepared)});
-  }
-  if (references_.empty()) throw std::invalid_argument("the map has no usable reference scan to localise against");
-  std::vector<LaserScan> scans;
+  std::vector<LaserScan> scans;  // every reference scan is map evidence, usable for PSM or not
   std::vector<Pose2> poses;
   for (const MapReference& r : references) {
     scans.push_back(r.scan);
     poses.push_back(r.pose);
+    std::optional<PreparedScan> prepared = prepareMatchableScan(r.scan, params_.psm);
+    if (prepared && finitePose(r.pose)) references_.push_back({r.id, r.pose, r.scan.laser_pose, std::move(*prepared)});
   }
+  if (references_.empty()) throw std::invalid_argument("the map has no usable reference scan to localise against");
   field_.emplace(scans, poses, params_.psm.max_range, options_.global_fit_distance);
 }
 
@@ -80,26 +72,16 @@ void MapLocalizer::predictTo(int64_t utime) {
 std::optional<MapLocalizer::Fix> MapLocalizer::match(size_t index, const PreparedScan& scan, const Pose2& mount,
                                                      const Pose2& relative_guess, bool wide) {
   const Reference& ref = references_[index];
-  const double saved_window = matcher_.params().initial_search_window;
-  if (wide) matcher_.params().initial_search_window = params_.loop_search_window;
-  const Pose2 laser_guess = laserPoseInReferenceLaser(Pose2(), relative_guess, ref.laser_mount, mount);
-  const MatchResult m = matcher_.match(ref.scan, scan, laser_guess, params_.method);
-  matcher_.params().initial_search_window = saved_window;
-  if (!m.ok() || (wide && !m.converged) || !finitePose(m.pose) || !m.cov.allFinite()) return std::nullopt;
-  const Pose2 z = robotMotionFromLaserMotion(m.pose, ref.laser_mount, mount);
-  const Mat3 R = params_.match_cov_scale * robotMotionCovariance(m.pose, m.cov, ref.laser_mount, mount) +
-                 Vec3(params_.min_match_sigma_xy * params_.min_match_sigma_xy,
-                      params_.min_match_sigma_xy * params_.min_match_sigma_xy,
-                      params_.min_match_sigma_theta * params_.min_match_sigma_theta)
-                     .asDiagonal()
-                     .toDenseMatrix();
+  const std::optional<RobotFrameMatch> m =
+      matchInRobotFrame(matcher_, ref.scan, ref.laser_mount, scan, mount, relative_guess, params_, wide);
+  if (!m) return std::nullopt;
   const Mat3 J = composeJacobianB(ref.pose);
   Fix fix;
   fix.reference = index;
-  fix.pose = ref.pose * z;
-  fix.cov = J * R * J.transpose();
-  fix.error_index = m.error_index;
-  fix.overlap = static_cast<double>(m.valid_points) / std::max(1, std::min(ref.scan.valid_count, scan.valid_count));
+  fix.pose = ref.pose * m->z;
+  fix.cov = J * m->R * J.transpose();
+  fix.error_index = m->error_index;
+  fix.overlap = m->overlap;
   return fix;
 }
 
@@ -111,9 +93,7 @@ bool MapLocalizer::goodFix(const Fix& fix, bool global) const {
 }
 
 bool MapLocalizer::withinOdometryFault(const Pose2& from, const Pose2& to) const {
-  const Pose2 miss = between(from, to);
-  return miss.translation().norm() <= params_.max_odometry_fault_translation &&
-         std::abs(miss.theta) <= params_.max_odometry_fault_rotation;
+  return near(from, to, params_.max_odometry_fault_translation, params_.max_odometry_fault_rotation);
 }
 
 bool MapLocalizer::applyFix(const Fix& fix) {
@@ -196,22 +176,18 @@ std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& r
   const auto best = std::max_element(hits.begin(), hits.end(), [](const Fix& a, const Fix& b) {
     return a.fit < b.fit || (a.fit == b.fit && a.error_index > b.error_index);
   });
-  if (best->fit < options_.global_min_fit) return std::nullopt;
   std::vector<size_t> supporting;
-  for (const Fix& other : hits) {
-    const Pose2 apart = between(best->pose, other.pose);
-    if (apart.translation().norm() <= options_.confirm_translation && std::abs(apart.theta) <= options_.confirm_rotation &&
+  for (const Fix& other : hits)
+    if (near(best->pose, other.pose, options_.confirm_translation, options_.confirm_rotation) &&
         std::find(supporting.begin(), supporting.end(), other.reference) == supporting.end())
       supporting.push_back(other.reference);
-  }
   if (supporting.size() < static_cast<size_t>(options_.global_min_support)) {
     ++stats_.global_unsupported;
     return std::nullopt;
   }
   for (const Fix& other : hits) {
-    const Pose2 apart = between(best->pose, other.pose);
-    const bool elsewhere = apart.translation().norm() > options_.global_ambiguity_distance ||
-                           std::abs(apart.theta) > params_.loop_ambiguity_heading;
+    const bool elsewhere =
+        !near(best->pose, other.pose, options_.global_ambiguity_distance, params_.loop_ambiguity_heading);
     if (elsewhere && other.fit >= best->fit - options_.global_fit_margin) {
       ++stats_.global_ambiguous;
       return std::nullopt;
@@ -231,7 +207,7 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
   MapLocalizationResult result;
   predictTo(scan.utime);
   const Pose2 predicted = pose_;
-  std::optional<PreparedScan> prepared = prepareUsable(scan, params_.psm);
+  std::optional<PreparedScan> prepared = prepareMatchableScan(scan, params_.psm);
   if (!prepared) {
     ++stats_.unusable_scans;
   } else if (localized_) {
@@ -248,12 +224,8 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
     std::optional<Fix> hit = searchGlobally(scan, *prepared);
     if (hit) {
       const bool confirmed =
-          hypothesis_ && [&] {
-            const Pose2 expected = hypothesis_->pose * between(hypothesis_->odometry_pose, predicted);
-            const Pose2 miss = between(expected, hit->pose);
-            return miss.translation().norm() <= options_.confirm_translation &&
-                   std::abs(miss.theta) <= options_.confirm_rotation;
-          }();
+          hypothesis_ && near(hypothesis_->pose * between(hypothesis_->odometry_pose, predicted), hit->pose,
+                              options_.confirm_translation, options_.confirm_rotation);
       if (confirmed) {
         pose_ = hit->pose;
         cov_ = hit->cov;
@@ -274,11 +246,11 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
   last_scan_pose_ = pose_;
   result.localized = localized_;
   result.pose = {scan.utime, pose_, cov_};
-  record(scan.utime, result);
+  record(result);
   return result;
 }
 
-void MapLocalizer::record(int64_t utime, const MapLocalizationResult& result) {
+void MapLocalizer::record(const MapLocalizationResult& result) {
   const size_t index = online_.size();
   if (result.matched) ++stats_.matched_scans;
   if (!localized_) ++stats_.odometry_only_scans;
@@ -287,8 +259,7 @@ void MapLocalizer::record(int64_t utime, const MapLocalizationResult& result) {
     stretches_.push_back({*lost_since_, index});
     lost_since_.reset();
   }
-  PoseStamped pose{utime, pose_, cov_};
-  online_.push_back(pose);
+  online_.push_back(result.pose);
   localized_flags_.push_back(localized_);
 }
 

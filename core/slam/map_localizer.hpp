@@ -126,7 +126,7 @@ class MapLocalizer {
   /// Global search: the unambiguous best hit of this scan, if any.
   std::optional<Fix> searchGlobally(const LaserScan& raw, const PreparedScan& scan);
   void lose();
-  void record(int64_t utime, const MapLocalizationResult& result);
+  void record(const MapLocalizationResult& result);
 
   PsmSlamParams params_;
   MapLocalizationParams options_;

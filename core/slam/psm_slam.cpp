@@ -1,5 +1,7 @@
 #include "slam/psm_slam.hpp"
 
+#include "slam/psm_match.hpp"
+
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
@@ -27,12 +29,6 @@ std::pair<Pose2, Mat3> composeThroughScan(const Pose2& z_a, const Mat3& R_a, con
   const Mat3 Jb = composeJacobianB(z_a) * inverseJacobian(z_b);
   return {z_a * z_b_inv, Ja * R_a * Ja.transpose() + Jb * R_b * Jb.transpose()};
 }
-
-Mat3 covarianceFloor(double sigma_xy, double sigma_theta) {
-  return Vec3(sigma_xy * sigma_xy, sigma_xy * sigma_xy, sigma_theta * sigma_theta).asDiagonal();
-}
-
-bool finitePose(const Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
 
 }  // namespace
 
@@ -118,25 +114,21 @@ std::optional<PsmSlam::Observation> PsmSlam::matchKeyframe(const Keyframe& keyfr
                                                            const RelativePosePrediction& prior, bool loop_candidate,
                                                            bool wide_search) {
   const std::vector<Pose2> guesses = loop_candidate ? loopGuesses(prior, wide_search) : std::vector<Pose2>{prior.mean};
-  const double saved_window = matcher_.params().initial_search_window;
-  if (loop_candidate) matcher_.params().initial_search_window = params_.loop_search_window;
   std::optional<Observation> best;
   std::vector<Observation> converged;
   for (const Pose2& guess : guesses) {
-    const Pose2 laser_guess = laserPoseInReferenceLaser(Pose2(), guess, keyframe.laser_mount, mount);
-    const MatchResult m = matcher_.match(keyframe.scan, scan, laser_guess, params_.method);
-    if (!m.ok() || (loop_candidate && !m.converged) || !finitePose(m.pose) || !m.cov.allFinite()) continue;
+    const std::optional<RobotFrameMatch> m =
+        matchInRobotFrame(matcher_, keyframe.scan, keyframe.laser_mount, scan, mount, guess, params_, loop_candidate);
+    if (!m) continue;
     Observation o;
     o.keyframe = keyframe.id;
-    o.z = robotMotionFromLaserMotion(m.pose, keyframe.laser_mount, mount);
-    o.R = params_.match_cov_scale * robotMotionCovariance(m.pose, m.cov, keyframe.laser_mount, mount) +
-          covarianceFloor(params_.min_match_sigma_xy, params_.min_match_sigma_theta);
-    o.error_index = m.error_index;
-    o.overlap = static_cast<double>(m.valid_points) / std::max(1, std::min(keyframe.scan.valid_count, scan.valid_count));
+    o.z = m->z;
+    o.R = m->R;
+    o.error_index = m->error_index;
+    o.overlap = m->overlap;
     if (!best || o.error_index < best->error_index) best = o;
     converged.push_back(o);
   }
-  matcher_.params().initial_search_window = saved_window;
   if (best) {
     for (const Observation& o : converged)
       if (between(best->z, o.z).translation().norm() > params_.loop_ambiguity_distance &&
@@ -497,15 +489,8 @@ PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
     filter_utime_ = scan.utime;
   }
   predictTo(scan.utime);
-  std::optional<PreparedScan> prepared;
-  if (validateScan(scan).empty()) {
-    try {
-      prepared = prepareScan(scan, params_.psm);
-    } catch (const std::exception&) {
-      prepared.reset();
-    }
-  }
-  if (!prepared || prepared->valid_count < params_.psm.min_valid_points) {
+  std::optional<PreparedScan> prepared = prepareMatchableScan(scan, params_.psm);
+  if (!prepared) {
     ++stats_.unusable_scans;
     record(scan.utime, result);
     return result;

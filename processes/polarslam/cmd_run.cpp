@@ -48,7 +48,10 @@ Pose2 parseInitialPose(const std::string& text) {
 }
 
 /// The estimator of a run: the pipeline's, or with --load-map localisation in the stored map.
+/// Refuses options that do not go together.
 std::unique_ptr<Estimator> makeEstimator(const RunOptions& o) {
+  if (!o.save_map.empty() && o.pipeline != "psm-slam")
+    throw std::runtime_error("--save-map goes with --pipeline psm-slam");
   if (o.load_map.empty()) {
     if (!o.initial_pose.empty()) throw std::runtime_error("--initial-pose goes with --load-map");
     std::unique_ptr<Estimator> estimator = pipelines().at(o.pipeline)(o.pipeline_options);
@@ -245,8 +248,6 @@ void runPipeline(RunOptions o) {
   const std::string label = o.pipeline == "recorded" ? o.channels.estimated_pose + " (recorded)"
                             : o.load_map.empty() ? o.pipeline
                                                  : o.pipeline + " (" + o.mode + " in " + o.load_map + ")";
-  if (!o.save_map.empty() && o.pipeline != "psm-slam")
-    throw std::runtime_error("--save-map goes with --pipeline psm-slam");
   if (o.pipeline == "recorded") addRecordedChannels(o.channels);
   const std::string final_out = o.out;
   const StopOnSignals stop;

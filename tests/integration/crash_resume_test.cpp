@@ -24,6 +24,7 @@ using namespace std::chrono_literals;
 using polarslam::testing::binPath;
 using polarslam::testing::ChildProcess;
 using polarslam::testing::readFile;
+using polarslam::testing::readJson;
 using polarslam::testing::runToEnd;
 using polarslam::testing::sourcePath;
 
@@ -73,9 +74,7 @@ double recordedAte(const fs::path& run_dir, const std::string& channel) {
                      run_dir / "eval.out", 60s),
             0)
       << readFile(run_dir / "eval.out");
-  std::ifstream in(eval / "report.json");
-  const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
-  return report.value("ate_rmse_m", 1e9);
+  return readJson(eval / "report.json").value("ate_rmse_m", 1e9);
 }
 
 RunFigures figuresOf(const fs::path& run_dir) {

@@ -24,7 +24,9 @@
 using namespace std::chrono_literals;
 using polarslam::testing::binPath;
 using polarslam::testing::ChildProcess;
+using polarslam::testing::freshDir;
 using polarslam::testing::readFile;
+using polarslam::testing::readJson;
 using polarslam::testing::runToEnd;
 using polarslam::testing::sourcePath;
 
@@ -37,8 +39,7 @@ nlohmann::json runReport(const fs::path& dir, const std::string& name, std::vect
   args.insert(args.begin(), {binPath("polarslam"), "run"});
   args.insert(args.end(), {"--out", out.string()});
   EXPECT_EQ(runToEnd(args, dir / (name + ".out"), 300s), 0) << readFile(dir / (name + ".out"));
-  std::ifstream in(out / "report.json");
-  return nlohmann::json::parse(in, nullptr, false);
+  return readJson(out / "report.json");
 }
 
 double ate(const nlohmann::json& report) { return report.value("ate_rmse_m", std::nan("")); }
@@ -63,9 +64,7 @@ const std::vector<std::string> kStages{"features", "fusion", "ekf-slam", "psm-sl
 }  // namespace
 
 TEST(FaultInjection, RandomKillsAndAFutureOdometryLeaveTheFinalMapsAsAccurateAsAnUndisturbedRun) {
-  const fs::path dir = fs::temp_directory_path() / ("polarslam-faults-it-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = freshDir("faults-it");
   const std::string log = sourcePath("logs/office.lcmlog");
   const nlohmann::json undisturbed_ekf =
       runReport(dir, "offline-ekf", {"--log", log, "--pipeline", "ekf", "--config", sourcePath("config/ekf.yaml")});

@@ -2,17 +2,17 @@
 // map saved by one run, the same log localised in it from a known start by another, and the
 // option mistakes a user can make refused with a message.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "child_process.hpp"
 
 using namespace std::chrono_literals;
 using polarslam::testing::binPath;
+using polarslam::testing::freshDir;
 using polarslam::testing::readFile;
+using polarslam::testing::readJson;
 using polarslam::testing::runToEnd;
 using polarslam::testing::sourcePath;
 
@@ -20,9 +20,7 @@ namespace {
 namespace fs = std::filesystem;
 
 TEST(LocalizeCli, TheDefaultLogLocalisesInItsOwnSavedMapAndBadOptionsAreRefused) {
-  const fs::path dir = fs::temp_directory_path() / ("polarslam-localize-it-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = freshDir("localize-it");
   const std::string log = sourcePath("logs/office.lcmlog"), config = sourcePath("config/psm-slam.yaml");
   const std::string map = (dir / "map").string();
   ASSERT_EQ(runToEnd({binPath("polarslam"), "run", "--log", log, "--pipeline", "psm-slam", "--config", config,
@@ -36,8 +34,7 @@ TEST(LocalizeCli, TheDefaultLogLocalisesInItsOwnSavedMapAndBadOptionsAreRefused)
                      dir / "localize.out", 300s),
             0)
       << readFile(dir / "localize.out");
-  std::ifstream in(dir / "localize" / "report.json");
-  const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
+  const nlohmann::json report = readJson(dir / "localize" / "report.json");
   ASSERT_TRUE(report.contains("localization")) << report.dump(2);
   const auto& loc = report["localization"];
   EXPECT_EQ(loc["global_searches"], 0) << "a known start needs no search";

@@ -21,6 +21,7 @@
 using namespace std::chrono_literals;
 using polarslam::testing::binPath;
 using polarslam::testing::readFile;
+using polarslam::testing::readJson;
 using polarslam::testing::runToEnd;
 using polarslam::testing::sourcePath;
 
@@ -55,11 +56,6 @@ LogOrder logOrder(const std::string& log_path) {
       order.stopped[status.name] = i;
   }
   return order;
-}
-
-nlohmann::json readJson(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in, nullptr, false);
 }
 
 /// A map_server map (map.yaml + map.pgm): occupied cells as map-frame cell indices.

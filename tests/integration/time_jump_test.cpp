@@ -19,6 +19,7 @@
 
 using namespace std::chrono_literals;
 using polarslam::testing::binPath;
+using polarslam::testing::freshDir;
 using polarslam::testing::readFile;
 using polarslam::testing::runToEnd;
 using polarslam::testing::sourcePath;
@@ -27,13 +28,6 @@ namespace {
 
 namespace fs = std::filesystem;
 constexpr int64_t kHour = 3600LL * 1000000;
-
-fs::path freshDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("polarslam-" + name + "-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 /// The log with, a third of the way in, a copy of an ODOMETRY message stamped an hour later and
 /// a GROUND_TRUTH pose 1e296 m away.

@@ -60,14 +60,8 @@ SyntheticRun runAlong(const std::vector<Pose2>& path, size_t hidden_step, const 
   Pose2 odometry = odometry_frame;
   const int64_t t0 = 2'000'000'000'000'000, period = 200'000;
   for (size_t k = 0; k < path.size(); ++k) {
-    if (k > 0 && k != hidden_step) {
-      Pose2 step = between(path[k - 1], path[k]);
-      const double distance = step.translation().norm();
-      step.x += options.odometry_sigma_per_m * std::sqrt(distance) * unit(rng);
-      step.theta += options.odometry_heading_sigma * std::sqrt(distance + std::abs(step.theta)) * unit(rng) +
-                    options.heading_bias_per_m * distance;
-      odometry = odometry * step;
-    }
+    if (k > 0 && k != hidden_step)
+      odometry = odometry * testing::noisyOdometryStep(between(path[k - 1], path[k]), options, rng, unit);
     const int64_t utime = t0 + static_cast<int64_t>(k) * period;
     run.odometry.push_back({utime, static_cast<int64_t>(k), odometry, Mat3::Zero(), 0.0, 0.0, 0.0, 0.0});
     run.scans.push_back(testing::castScan(world, path[k], options, rng, utime));

@@ -96,6 +96,19 @@ inline std::vector<Pose2> loopPath(const SyntheticRunOptions& o) {
   return path;
 }
 
+/// The odometry's reading of a true step `delta`: distance noise, heading noise and heading bias.
+inline Pose2 noisyOdometryStep(const Pose2& delta, const SyntheticRunOptions& o, std::mt19937_64& rng,
+                               std::normal_distribution<double>& unit) {
+  const double distance = delta.translation().norm();
+  Pose2 noisy = delta;
+  if (distance > 0 || std::abs(delta.theta) > 0) {
+    noisy.x += o.odometry_sigma_per_m * std::sqrt(distance) * unit(rng);
+    noisy.theta += o.odometry_heading_sigma * std::sqrt(distance + std::abs(delta.theta)) * unit(rng) +
+                   o.heading_bias_per_m * distance;
+  }
+  return noisy;
+}
+
 inline SyntheticRun simulateLoopRun(const World& world, const SyntheticRunOptions& o) {
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> unit(0.0, 1.0);
@@ -106,17 +119,7 @@ inline SyntheticRun simulateLoopRun(const World& world, const SyntheticRunOption
   const int64_t t0 = 1'000'000'000'000'000;
   const int64_t period = static_cast<int64_t>(1e6 / o.scan_rate);
   for (size_t k = 0; k < path.size(); ++k) {
-    if (k > 0) {
-      const Pose2 delta = between(path[k - 1], path[k]);
-      const double distance = delta.translation().norm();
-      Pose2 noisy = delta;
-      if (distance > 0 || std::abs(delta.theta) > 0) {
-        noisy.x += o.odometry_sigma_per_m * std::sqrt(distance) * unit(rng);
-        noisy.theta += o.odometry_heading_sigma * std::sqrt(distance + std::abs(delta.theta)) * unit(rng) +
-                       o.heading_bias_per_m * distance;
-      }
-      odometry_pose = odometry_pose * noisy;
-    }
+    if (k > 0) odometry_pose = odometry_pose * noisyOdometryStep(between(path[k - 1], path[k]), o, rng, unit);
     const int64_t utime = t0 + static_cast<int64_t>(k) * period;
     OdometryReading reading;
     reading.utime = utime;

@@ -1,0 +1,45 @@
+#include "slam/psm_match.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+
+namespace polarslam {
+
+bool finitePose(const Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
+
+Mat3 covarianceFloor(double sigma_xy, double sigma_theta) {
+  return Vec3(sigma_xy * sigma_xy, sigma_xy * sigma_xy, sigma_theta * sigma_theta).asDiagonal();
+}
+
+std::optional<PreparedScan> prepareMatchableScan(const LaserScan& scan, const PsmParams& params) {
+  if (!validateScan(scan).empty()) return std::nullopt;
+  try {
+    PreparedScan prepared = prepareScan(scan, params);
+    if (prepared.valid_count < params.min_valid_points) return std::nullopt;
+    return prepared;
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+std::optional<RobotFrameMatch> matchInRobotFrame(ScanMatcher& matcher, const PreparedScan& reference,
+                                                 const Pose2& reference_mount, const PreparedScan& scan,
+                                                 const Pose2& mount, const Pose2& guess, const PsmSlamParams& params,
+                                                 bool wide) {
+  const double saved_window = matcher.params().initial_search_window;
+  if (wide) matcher.params().initial_search_window = params.loop_search_window;
+  const Pose2 laser_guess = laserPoseInReferenceLaser(Pose2(), guess, reference_mount, mount);
+  const MatchResult m = matcher.match(reference, scan, laser_guess, params.method);
+  matcher.params().initial_search_window = saved_window;
+  if (!m.ok() || (wide && !m.converged) || !finitePose(m.pose) || !m.cov.allFinite()) return std::nullopt;
+  RobotFrameMatch match;
+  match.z = robotMotionFromLaserMotion(m.pose, reference_mount, mount);
+  match.R = params.match_cov_scale * robotMotionCovariance(m.pose, m.cov, reference_mount, mount) +
+            covarianceFloor(params.min_match_sigma_xy, params.min_match_sigma_theta);
+  match.error_index = m.error_index;
+  match.overlap = static_cast<double>(m.valid_points) / std::max(1, std::min(reference.valid_count, scan.valid_count));
+  return match;
+}
+
+}  // namespace polarslam
