@@ -20,6 +20,7 @@ class Node;
 
 namespace polarslam {
 
+class ParameterTable;
 class YamlFields;
 
 /// A SICK LMS-like laser of which only the white noise is known: σ_n = 1 cm.
@@ -51,12 +52,11 @@ struct LaserFeatureConfig {
   double corner_junction_distance = 0.02;
 };
 
-/// Reads the configuration from YAML. Either file kind works:
-///  - a robot file (config/robots/*.yaml): the error model comes from its `laser:` section
-///    (`errors:`, `tilt_deg`, `tilt_axis_deg`), exactly as the simulator uses it;
-///  - a features file (config/laser-features.yaml) with a `laser_features:` section.
-/// A `laser_features:` section (in either) sets segmentation and corner options and may
-/// override the error model. Throws std::runtime_error "FILE:LINE: ..." on bad input.
+/// Binds every key of a `laser_features:` section (config/laser-features.yaml) to `config`.
+void describeLaserFeatures(ParameterTable& table, LaserFeatureConfig& config);
+/// Reads a features file (config/laser-features.yaml: one `laser_features:` section); keys left
+/// out keep the defaults. A robot file's error model comes through core/robot instead
+/// (laserErrorParams). Throws std::runtime_error "FILE:LINE: ..." on bad input.
 LaserFeatureConfig loadLaserFeatureConfig(const std::string& path);
 /// Applies a `laser_features:` section (the keys of config/laser-features.yaml) to `config`.
 void readLaserFeatureSection(const YamlFields& yaml, const YAML::Node& section, LaserFeatureConfig& config);

@@ -59,7 +59,7 @@ struct LineFitOptions {
   int max_iterations = 20;
   double angle_tolerance = 1e-6;      ///< rad: stop when |Δα| and |Δd| are both below tolerance
   double distance_tolerance = 1e-6;   ///< m (docs/algorithms.md §16.3; the step taken then leaves ~1e-12)
-  double max_incidence = 1.4;         ///< rad: fail if a beam meets the line at a larger |α − φ|
+  double max_incidence = deg2rad(80.0);  ///< rad: fail if a beam meets the line at a larger |α − φ|
 };
 
 enum class LineFitStatus { Ok, TooFewPoints, GrazingBeam, Singular, Diverged };

@@ -3,6 +3,8 @@
 // error estimates:  Δr ≈ r_b + k(r' − r_min) + w|tan β| + b·sin(2π(r' − Q(r'))/q_r) + r_n   (2.8)
 #include <cmath>
 
+#include "geometry/pose2.hpp"
+
 namespace polarslam {
 
 struct RangeErrorParams {
@@ -12,7 +14,7 @@ struct RangeErrorParams {
   double incidence = 0.0;         ///< w, m: bias w·|tan β| with β the incidence angle
   double quantum = 0.0;           ///< q_r, m: truncating quantiser step (0 = none)
   double noise_sigma = 0.0;       ///< σ_n, m: white Gaussian noise before the quantiser
-  double max_incidence = 1.4;     ///< rad: |β| is clamped here so tan β stays finite
+  double max_incidence = deg2rad(80.0);  ///< rad: |β| is clamped here so tan β stays finite
 };
 
 /// Truncating quantiser Q(r) = q·floor(r/q)   (2.1)

@@ -42,9 +42,10 @@ void describeFusion(ParameterTable& t, FeaturePipelineConfig& c) {
 
 }  // namespace
 
-void describeFeaturePipeline(ParameterTable& ekf, ParameterTable& fusion, FeaturePipelineConfig& config) {
-  describeSlam(ekf, config.slam);
-  describeFusion(fusion, config);
+void describeFeaturePipeline(FeaturePipelineTables& tables, FeaturePipelineConfig& config) {
+  describeSlam(tables.ekf, config.slam);
+  describeFusion(tables.fusion, config);
+  describeLaserFeatures(tables.laser_features, config.laser);
 }
 
 namespace {
@@ -85,13 +86,7 @@ FeaturePipelineConfig configForRobot(const RobotDescription& robot, SlamSensors 
   c.slam.odometry.wheels.k_right = robot.odometry.k_right;
   c.fusion.odometry = c.slam.odometry;
   // The laser's error model (2.8), as the simulator uses it.
-  c.laser.errors = LaserErrorParams{};
-  c.laser.errors.range = robot.laser.errors;
-  if (!robot.laser.compensate_quantizer_offset)
-    c.laser.errors.range.fixed_bias = std::abs(c.laser.errors.range.fixed_bias) + robot.laser.errors.quantum / 2;
-  c.laser.errors.output_noise_sigma = robot.laser.output_noise_sigma;
-  c.laser.errors.tilt = robot.laser.tilt;
-  c.laser.errors.tilt_axis = robot.laser.tilt_axis;
+  c.laser.errors = laserErrorParams(robot.laser);
   const LaserErrorModel model(c.laser.errors);
   c.fusion.selection.laser_range_sigma = model.rangeSigma();
   if (!robot.sonars.empty()) {
@@ -119,12 +114,11 @@ FeaturePipelineConfig loadFeaturePipelineConfig(const std::string& path, SlamSen
     if (robot.is_relative()) robot = std::filesystem::path(path).parent_path() / robot;
     c = configForRobotFile(robot.string(), sensors);
   }
-  ParameterTable ekf, fusion;
-  describeSlam(ekf, c.slam);
-  describeFusion(fusion, c);
-  ekf.read(y, root["ekf"], "ekf");
-  fusion.read(y, root["fusion"], "fusion");
-  if (y.has(root, "laser_features")) readLaserFeatureSection(y, root["laser_features"], c.laser);
+  FeaturePipelineTables tables;
+  describeFeaturePipeline(tables, c);
+  tables.ekf.read(y, root["ekf"], "ekf");
+  tables.fusion.read(y, root["fusion"], "fusion");
+  tables.laser_features.read(y, root["laser_features"], "laser_features");
   c.fusion.odometry = c.slam.odometry;
   return c;
 }

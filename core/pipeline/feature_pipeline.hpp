@@ -52,8 +52,13 @@ struct FeaturePipelineConfig {
 /// constants, laser error model, laser noise for the sonar selection gates, sonar accuracy floors.
 FeaturePipelineConfig configForRobot(const RobotDescription& robot, SlamSensors sensors);
 
-/// The `ekf:` and `fusion:` sections' keys, bound to `config` (config/ekf.yaml lists them all).
-void describeFeaturePipeline(ParameterTable& ekf, ParameterTable& fusion, FeaturePipelineConfig& config);
+/// The sections of a pipeline file: `ekf:` and `fusion:` (config/ekf.yaml lists their keys) and
+/// `laser_features:` (config/laser-features.yaml lists its keys).
+struct FeaturePipelineTables {
+  ParameterTable ekf, fusion, laser_features;
+};
+/// Binds every section's keys to `config`.
+void describeFeaturePipeline(FeaturePipelineTables& tables, FeaturePipelineConfig& config);
 
 /// Reads a robot file or an estimator file (see above); an empty path gives the default robot's
 /// configuration. Throws std::runtime_error "FILE:LINE: ...".

@@ -33,9 +33,10 @@ std::string effectiveConfigYaml(const std::string& pipeline, const PipelineOptio
   }
   if (pipeline == "ekf") {
     FeaturePipelineConfig config = loadFeaturePipelineConfig(o.config, parseSlamSensors(o.sensors));
-    ParameterTable fusion;
-    describeFeaturePipeline(table, fusion, config);
-    return "ekf:\n" + table.yaml(2) + "fusion:\n" + fusion.yaml(2);
+    FeaturePipelineTables tables;
+    describeFeaturePipeline(tables, config);
+    return "ekf:\n" + tables.ekf.yaml(2) + "fusion:\n" + tables.fusion.yaml(2) + "laser_features:\n" +
+           tables.laser_features.yaml(2);
   }
   return {};
 }

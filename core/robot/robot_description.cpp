@@ -218,4 +218,14 @@ void validate(const RobotDescription& c) {
   }
 }
 
+LaserErrorParams laserErrorParams(const LaserConfig& laser) {
+  LaserErrorParams p;
+  p.range = laser.errors;
+  if (!laser.compensate_quantizer_offset) p.range.fixed_bias = std::abs(p.range.fixed_bias) + laser.errors.quantum / 2;
+  p.output_noise_sigma = laser.output_noise_sigma;
+  p.tilt = laser.tilt;
+  p.tilt_axis = laser.tilt_axis;
+  return p;
+}
+
 }  // namespace polarslam

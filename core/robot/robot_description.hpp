@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "geometry/pose2.hpp"
+#include "laser/laser_error_model.hpp"
 #include "laser/range_error_model.hpp"
 
 namespace polarslam {
@@ -97,5 +98,9 @@ RobotDescription loadRobotDescription(const std::string& yaml_path);
 /// Checks the cross-field consistency of a config built in code (the loader checks each value).
 /// Throws std::invalid_argument naming the first bad key.
 void validate(const RobotDescription& config);
+
+/// The laser's error model (2.8) as a feature extractor should assume it, exactly as the simulator
+/// applies it: an uncompensated quantiser's −q_r/2 becomes part of the fixed bias.
+LaserErrorParams laserErrorParams(const LaserConfig& laser);
 
 }  // namespace polarslam

@@ -3,6 +3,8 @@
 #include <CLI/CLI.hpp>
 
 #include <filesystem>
+#include <iostream>
+#include <memory>
 
 namespace polarslam {
 namespace {
@@ -20,6 +22,16 @@ fs::path executableFolder() {
 std::string polarslamVersion() { return std::string("polarslam ") + POLARSLAM_VERSION; }
 
 void addVersionFlag(CLI::App& app) { app.set_version_flag("--version", polarslamVersion(), "print the version and exit"); }
+
+void addPrintConfigFlag(CLI::App& app, std::function<std::string()> yaml) {
+  auto requested = std::make_shared<bool>(false);
+  app.add_flag("--print-config", *requested, "print the parameters in effect (YAML) and exit");
+  app.final_callback([requested, yaml = std::move(yaml)] {
+    if (!*requested) return;
+    std::cout << yaml();
+    throw CLI::Success();
+  });
+}
 
 std::string dataDirectory() {
   const fs::path installed = executableFolder() / ".." / "share" / "polarslam";

@@ -38,13 +38,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   JournalOptions journal;
   addJournalOptions(app, journal);
-  bool print_config = false;
-  app.add_flag("--print-config", print_config, "print the parameters in effect (YAML) and exit");
+  addPrintConfigFlag(app, [&] { return effectiveConfigYaml("ekf", {"fused", config}); });
   CLI11_PARSE(app, argc, argv);
-  if (print_config) {
-    std::cout << effectiveConfigYaml("ekf", {"fused", config});
-    return 0;
-  }
 
   try {
     const FeaturePipelineConfig cfg = loadFeaturePipelineConfig(config, SlamSensors::Fused);

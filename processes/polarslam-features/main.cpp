@@ -33,13 +33,8 @@ int main(int argc, char** argv) {
   app.add_option("--odometry-channel", odometry_channel, "speed for the motion error term; \"\" = none")
       ->capture_default_str();
   app.add_option("--sonar-channel", sonar_channel, "sonar cycles for break hints (fused sensors)")->capture_default_str();
-  bool print_config = false;
-  app.add_flag("--print-config", print_config, "print the parameters in effect (YAML) and exit");
+  addPrintConfigFlag(app, [&] { return effectiveConfigYaml("ekf", {sensors, options.configPath()}); });
   CLI11_PARSE(app, argc, argv);
-  if (print_config) {
-    std::cout << effectiveConfigYaml("ekf", {sensors, options.configPath()});
-    return 0;
-  }
 
   try {
     LaserFeatureStage stage(options.resolvePipeline(parseSlamSensors(sensors)));

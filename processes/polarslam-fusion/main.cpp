@@ -33,13 +33,8 @@ int main(int argc, char** argv) {
   app.add_option("--laser-channel", laser_channel, "raw scans for laser-aided sonar selection")->capture_default_str();
   app.add_option("--odometry-channel", odometry_channel, "channel of the odometry (odometry_t)")->capture_default_str();
   app.add_option("--out-channel", out_channel, "channel of the fused feature sets, base frame (features_t)")->capture_default_str();
-  bool print_config = false;
-  app.add_flag("--print-config", print_config, "print the parameters in effect (YAML) and exit");
+  addPrintConfigFlag(app, [&] { return effectiveConfigYaml("ekf", {sensors, config}); });
   CLI11_PARSE(app, argc, argv);
-  if (print_config) {
-    std::cout << effectiveConfigYaml("ekf", {sensors, config});
-    return 0;
-  }
 
   try {
     const SlamSensors which = parseSlamSensors(sensors);

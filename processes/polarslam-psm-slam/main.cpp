@@ -82,13 +82,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   JournalOptions journal;
   addJournalOptions(app, journal);
-  bool print_config = false;
-  app.add_flag("--print-config", print_config, "print the parameters in effect (YAML) and exit");
+  addPrintConfigFlag(app, [&] { return effectiveConfigYaml("psm-slam", {"fused", config}); });
   CLI11_PARSE(app, argc, argv);
-  if (print_config) {
-    std::cout << effectiveConfigYaml("psm-slam", {"fused", config});
-    return 0;
-  }
 
   try {
     const PsmSlamEstimatorConfig estimator_config =

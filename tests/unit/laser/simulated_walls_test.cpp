@@ -94,7 +94,9 @@ struct WorldRun {
 
 TEST(SimulatedWalls, ExtractedLinesAndCornersMatchTheTrueWorldWithinTheirCovariance) {
   const std::string robot = POLARSLAM_SOURCE_DIR "/config/robots/default.yaml";
-  const LaserFeatureExtractor extractor(loadLaserFeatureConfig(robot));
+  LaserFeatureConfig config;
+  config.errors = laserErrorParams(loadRobotDescription(robot).laser);
+  const LaserFeatureExtractor extractor(config);
   NeesStatistics filter, random_only, apex_nees;
   int unmatched = 0, lines = 0, corners = 0;
   for (const WorldRun& run : {WorldRun{"room", 40.0}, WorldRun{"office", 60.0}}) {

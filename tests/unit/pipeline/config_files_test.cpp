@@ -8,6 +8,7 @@
 #include "pipeline/feature_slam_estimator.hpp"
 #include "pipeline/pipelines.hpp"
 #include "pipeline/psm_slam_estimator.hpp"
+#include "robot/robot_description.hpp"
 
 namespace polarslam {
 namespace {
@@ -29,13 +30,29 @@ TEST(ShippedConfig, PsmSlamFileListsEveryKeyWithItsDefault) {
 TEST(ShippedConfig, EkfFileListsEveryKeyWithItsDefault) {
   const YamlFields file(source("config/ekf.yaml"));
   FeaturePipelineConfig defaults;
-  ParameterTable ekf, fusion;
-  describeFeaturePipeline(ekf, fusion, defaults);
-  EXPECT_TRUE(ekf.missingFrom(file.root()["ekf"]).empty());
-  EXPECT_TRUE(fusion.missingFrom(file.root()["fusion"]).empty());
+  FeaturePipelineTables tables;
+  describeFeaturePipeline(tables, defaults);
+  EXPECT_TRUE(tables.ekf.missingFrom(file.root()["ekf"]).empty());
+  EXPECT_TRUE(tables.fusion.missingFrom(file.root()["fusion"]).empty());
+  // The laser's error model comes from the robot file the pipeline file names.
+  defaults.laser.errors = laserErrorParams(loadRobotDescription(source("config/robots/default.yaml")).laser);
   PipelineOptions options;
   options.config = source("config/ekf.yaml");
-  EXPECT_EQ(effectiveConfigYaml("ekf", options), "ekf:\n" + ekf.yaml(2) + "fusion:\n" + fusion.yaml(2));
+  EXPECT_EQ(effectiveConfigYaml("ekf", options), "ekf:\n" + tables.ekf.yaml(2) + "fusion:\n" + tables.fusion.yaml(2) +
+                                                     "laser_features:\n" + tables.laser_features.yaml(2));
+}
+
+TEST(ShippedConfig, LaserFeaturesFileListsEveryKeyWithItsDefault) {
+  const YamlFields file(source("config/laser-features.yaml"));
+  LaserFeatureConfig defaults;
+  ParameterTable table;
+  describeLaserFeatures(table, defaults);
+  EXPECT_TRUE(table.missingFrom(file.root()["laser_features"]).empty())
+      << "config/laser-features.yaml lacks " << ::testing::PrintToString(table.missingFrom(file.root()["laser_features"]));
+  LaserFeatureConfig loaded = loadLaserFeatureConfig(source("config/laser-features.yaml"));
+  ParameterTable loaded_table;
+  describeLaserFeatures(loaded_table, loaded);
+  EXPECT_EQ(loaded_table.yaml(), table.yaml()) << "a value differs from its default";
 }
 
 TEST(ShippedConfig, PsmSlamParametersLoadAndTyposAreRejected) {

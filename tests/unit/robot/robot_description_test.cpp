@@ -87,6 +87,28 @@ TEST_F(SimConfigFile, MissingKeysKeepDefaultsAndDegreesBecomeRadians) {
   EXPECT_DOUBLE_EQ(c.robot.max_speed, RobotDescription{}.robot.max_speed);
 }
 
+TEST_F(SimConfigFile, TheLaserErrorModelForFeaturesIsTheOneTheSimulatorApplies) {
+  const RobotDescription robot = load(R"(
+laser:
+  tilt_deg: 1.5
+  errors:
+    fixed_bias: 0.005
+    scan_bias_sigma: 0.003
+    quantum: 0.01
+    noise_sigma: 0.01
+    compensate_quantizer_offset: false
+    output_noise_sigma: 0.002
+)");
+  const LaserErrorParams e = laserErrorParams(robot.laser);
+  EXPECT_DOUBLE_EQ(e.range.fixed_bias, 0.005 + 0.005);  // + q/2 of the uncompensated quantiser
+  EXPECT_DOUBLE_EQ(e.range.scan_bias_sigma, 0.003);
+  EXPECT_DOUBLE_EQ(e.range.quantum, 0.01);
+  EXPECT_DOUBLE_EQ(e.output_noise_sigma, 0.002);
+  EXPECT_NEAR(e.tilt, deg2rad(1.5), 1e-12);
+  EXPECT_DOUBLE_EQ(laserErrorParams(load("laser:\n  errors: {fixed_bias: 0.005, quantum: 0.01}\n").laser).range.fixed_bias,
+                   0.005);  // compensated by default
+}
+
 TEST_F(SimConfigFile, ErrorsNameFileLineAndKey) {
   struct Case { std::string text, line, words; };
   const Case cases[] = {
