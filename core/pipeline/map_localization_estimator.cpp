@@ -26,29 +26,33 @@ void MapLocalizationEstimator::onLaser(const LaserScan& scan) {
   seconds_ += secondsSince(start);
 }
 
+nlohmann::json localizationReportJson(const MapLocalizer& localizer, double seconds) {
+  const MapLocalizerStats& s = localizer.stats();
+  return {{"reference_scans", localizer.referenceCount()},
+          {"scans", s.scans},
+          {"unusable_scans", s.unusable_scans},
+          {"matched_scans", s.matched_scans},
+          {"odometry_only_scans", s.odometry_only_scans},
+          {"match_failures", s.match_failures},
+          {"gate_rejections", s.gate_rejections},
+          {"odometry_faults", s.odometry_faults},
+          {"global_searches", s.global_searches},
+          {"global_matches", s.global_matches},
+          {"global_ambiguous", s.global_ambiguous},
+          {"global_see_through", s.global_see_through},
+          {"global_unsupported", s.global_unsupported},
+          {"global_unconfirmed", s.global_unconfirmed},
+          {"fixes", s.fixes},
+          {"losses", s.losses},
+          {"first_fix_scan", s.first_fix_scan},
+          {"localized_at_end", localizer.localized()},
+          {"seconds", seconds}};
+}
+
 void MapLocalizationEstimator::finish(const std::string& out_dir, nlohmann::json& report) {
   final_ = localizer_.trajectory();
   finished_ = true;
-  const MapLocalizerStats& s = localizer_.stats();
-  report["localization"] = {{"reference_scans", localizer_.referenceCount()},
-                            {"scans", s.scans},
-                            {"unusable_scans", s.unusable_scans},
-                            {"matched_scans", s.matched_scans},
-                            {"odometry_only_scans", s.odometry_only_scans},
-                            {"match_failures", s.match_failures},
-                            {"gate_rejections", s.gate_rejections},
-                            {"odometry_faults", s.odometry_faults},
-                            {"global_searches", s.global_searches},
-                            {"global_matches", s.global_matches},
-                            {"global_ambiguous", s.global_ambiguous},
-                            {"global_see_through", s.global_see_through},
-                            {"global_unsupported", s.global_unsupported},
-                            {"global_unconfirmed", s.global_unconfirmed},
-                            {"fixes", s.fixes},
-                            {"losses", s.losses},
-                            {"first_fix_scan", s.first_fix_scan},
-                            {"localized_at_end", localizer_.localized()},
-                            {"seconds", seconds_}};
+  report["localization"] = localizationReportJson(localizer_, seconds_);
   if (out_dir.empty() || map_.scans.empty()) return;
   GraphScanStore store;
   for (const MapReferenceScan& s : map_.scans) store.add(s.scan, s.anchor);

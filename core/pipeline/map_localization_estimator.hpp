@@ -15,6 +15,9 @@
 
 namespace polarslam {
 
+/// The "localization" report figures of a localiser (`seconds` spent in it).
+nlohmann::json localizationReportJson(const MapLocalizer& localizer, double seconds);
+
 class MapLocalizationEstimator : public Estimator {
  public:
   /// `initial_pose`: a known start in the map frame; without it the start is searched globally.

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <memory>
+#include <optional>
 
 #include "io/stopwatch.hpp"
 #include "map/map_store.hpp"
@@ -9,8 +11,7 @@
 namespace polarslam {
 
 MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, int64_t split_utime,
-                                      const Pose2& odometry_moved_by, const PsmSlamEstimatorConfig& config,
-                                      bool known_start) {
+                                      const PsmSlamEstimatorConfig& config, const MapThenLocalizeOptions& options) {
   MapThenLocalizeResult result;
   PsmSlamEstimator mapping(config);
   for (const CarmenEvent& e : events) {
@@ -21,31 +22,59 @@ MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, in
   nlohmann::json report;
   mapping.finish("", report);
   result.mapped = mapping.trajectory();
-  const std::vector<MapReference> references = mapReferences(mapping.storedMap());
-  result.reference_scans = references.size();
+  StoredMap map = mapping.storedMap();
+  result.reference_scans = map.scans.size();
 
   const auto start = std::chrono::steady_clock::now();
-  MapLocalizer localizer(references, config.slam);
-  if (known_start && !result.mapped.empty()) localizer.setInitialPose(result.mapped.back().pose, result.mapped.back().cov);
+  std::optional<Pose2> known_start;
+  if (options.known_start && !result.mapped.empty()) known_start = result.mapped.back().pose;
+  std::unique_ptr<Estimator> second;
+  const MapLocalizationEstimator* localization = nullptr;
+  const MapContinuationEstimator* continuation = nullptr;
+  if (options.continue_mapping) {
+    auto estimator = std::make_unique<MapContinuationEstimator>(std::move(map), config, known_start);
+    continuation = estimator.get();
+    second = std::move(estimator);
+  } else {
+    auto estimator = std::make_unique<MapLocalizationEstimator>(std::move(map), config, known_start);
+    localization = estimator.get();
+    second = std::move(estimator);
+  }
   int64_t first = 0, last = 0;
   for (const CarmenEvent& e : events) {
     if (e.utime() < split_utime) continue;
     if (e.isLaser()) {
-      localizer.addScan(e.laser());
+      second->onLaser(e.laser());
       first = first ? std::min(first, e.utime()) : e.utime();
       last = std::max(last, e.utime());
       continue;
     }
     OdometryReading moved = e.odometry();
-    moved.pose = odometry_moved_by * moved.pose;
-    localizer.addOdometry(moved);
+    moved.pose = options.odometry_moved_by * moved.pose;
+    second->onOdometry(moved);
   }
+  second->finish("", result.report);
   result.localize_seconds = secondsSince(start);
   result.localized_duration_s = 1e-6 * static_cast<double>(last - first);
-  result.localized = localizer.trajectory();
-  result.online = localizer.onlineTrajectory();
-  result.tied_to_map = localizer.localizedFlags();
-  result.stats = localizer.stats();
+  result.localized = second->trajectory();
+  result.online = second->onlineTrajectory();
+  const nlohmann::json& search = result.report["localization"];
+  if (localization) {
+    result.tied_to_map = localization->localizer().localizedFlags();
+    result.stats = localization->localizer().stats();
+    result.first_fix_scan = result.stats.first_fix_scan;
+  } else {
+    // The continued graph has moved the first half's reference scans too (the second half's loop
+    // closures): its scans follow them.
+    if (continuation->mapping()) result.mapped = reanchor(mapping.anchors(), continuation->mappingEstimator().slam().graph());
+    // Continuing: odometry only until the scan that placed the robot, mapping from then on.
+    const bool started = search.value("mapping_started", false);
+    const size_t before = search.value("scans_before_mapping", size_t{0});
+    const size_t placed = !started ? result.online.size() : before > 0 ? before - 1 : 0;
+    result.first_fix_scan = started ? static_cast<int64_t>(placed) : -1;
+    result.tied_to_map.assign(result.online.size(), false);
+    for (size_t k = placed; k < result.online.size(); ++k) result.tied_to_map[k] = true;
+  }
   result.joined = result.mapped;
   result.joined.insert(result.joined.end(), result.localized.begin(), result.localized.end());
   std::stable_sort(result.joined.begin(), result.joined.end(),

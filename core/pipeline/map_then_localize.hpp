@@ -9,27 +9,35 @@
 #include <vector>
 
 #include "io/carmen.hpp"
+#include "pipeline/map_continuation_estimator.hpp"
+#include "pipeline/map_localization_estimator.hpp"
 #include "pipeline/psm_slam_estimator.hpp"
 #include "slam/map_localizer.hpp"
 
 namespace polarslam {
 
 struct MapThenLocalizeResult {
-  std::vector<PoseStamped> mapped;     ///< final SLAM poses of the scans before the split
+  std::vector<PoseStamped> mapped;     ///< final SLAM poses of the scans before the split (continue:
+                                       ///< re-placed by the continued graph)
   std::vector<PoseStamped> localized;  ///< final localised poses after the split, map frame
   std::vector<PoseStamped> joined;     ///< both, in time order
   std::vector<PoseStamped> online;     ///< localised part as published at scan time
   std::vector<bool> tied_to_map;       ///< per online pose: localised (not odometry only)
-  MapLocalizerStats stats;
+  MapLocalizerStats stats;             ///< localize: the localiser's counts
+  int64_t first_fix_scan = -1;         ///< scan index (0-based) into the second half of the first fix
+  nlohmann::json report;               ///< the second half's report figures (localization, psm_slam)
   size_t reference_scans = 0;
   double localize_seconds = 0.0;       ///< inside the localiser (the map loaded, scans prepared)
   double localized_duration_s = 0.0;   ///< data time of the localised part
 };
 
-/// `odometry_moved_by`: the rigid transform applied to every odometry reading after the split.
-/// `known_start`: localisation starts from the mapping's last pose instead of searching.
+struct MapThenLocalizeOptions {
+  Pose2 odometry_moved_by;        ///< rigid transform applied to every odometry reading after the split
+  bool known_start = false;       ///< start from the mapping's last pose instead of searching
+  bool continue_mapping = false;  ///< --mode continue (new reference scans join the map) instead of localize
+};
+
 MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, int64_t split_utime,
-                                      const Pose2& odometry_moved_by, const PsmSlamEstimatorConfig& config,
-                                      bool known_start = false);
+                                      const PsmSlamEstimatorConfig& config, const MapThenLocalizeOptions& options);
 
 }  // namespace polarslam

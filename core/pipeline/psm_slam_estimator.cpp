@@ -1,5 +1,6 @@
 #include "pipeline/psm_slam_estimator.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 
@@ -68,6 +69,24 @@ void PsmSlamEstimator::onLaser(const LaserScan& scan) {
   map_scans_.add(scan, result.anchor);
 }
 
+void PsmSlamEstimator::continueMap(const StoredMap& map, const Pose2& start, const Mat3& start_cov) {
+  std::vector<LaserScan> references(map.graph.nodes().size());
+  std::vector<bool> found(references.size(), false);
+  for (const MapReferenceScan& s : map.scans) {
+    const long index = map.graph.indexOf(s.anchor.node);
+    if (index < 0 || found[static_cast<size_t>(index)]) continue;
+    references[static_cast<size_t>(index)] = s.scan;
+    found[static_cast<size_t>(index)] = true;
+  }
+  const auto missing = std::find(found.begin(), found.end(), false);
+  if (missing != found.end())
+    throw std::invalid_argument("the map has no reference scan for graph node " +
+                                std::to_string(map.graph.nodes()[static_cast<size_t>(missing - found.begin())].id) +
+                                ": it cannot be continued");
+  slam_.continueMap(map.graph, references, start, start_cov);
+  for (const MapReferenceScan& s : map.scans) map_scans_.add(s.scan, s.anchor);
+}
+
 nlohmann::json psmSlamReportJson(const PsmSlam& slam, const PoseGraphOptimizationSummary& final_optimization) {
   const PsmSlamStats& s = slam.stats();
   const PoseGraph& g = slam.graph();
@@ -87,6 +106,7 @@ nlohmann::json psmSlamReportJson(const PsmSlam& slam, const PoseGraphOptimizatio
             {"overlap", s.references_overlap}}},
           {"candidate_matches", s.candidate_matches},
           {"loop_closures", s.loop_closures},
+          {"map_candidate_matches", s.map_candidate_matches}, {"map_loop_closures", s.map_loop_closures},
           {"loop_failed_matches", s.loop_failed_matches}, {"loop_poor_matches", s.loop_poor_matches}, {"loop_ambiguous", s.loop_ambiguous}, {"loop_gate_rejections", s.loop_gate_rejections}, {"loop_unconfirmed", s.loop_unconfirmed},
           {"optimizations", s.optimizations},
           {"optimization_seconds", s.optimization_seconds},

@@ -54,12 +54,17 @@ class PsmSlamEstimator : public Estimator {
   /// Optimises, writes the grid files, adds "psm_slam" and "grid" figures to the report, and
   /// saves the map when saveMapTo() named a folder.
   void finish(const std::string& out_dir, nlohmann::json& report) override;
+  /// Continues `map` (before any message): its graph and reference scans are this run's start,
+  /// in its frame, and stay in the grid and in a saved map (PsmSlam::continueMap).
+  void continueMap(const StoredMap& map, const Pose2& start, const Mat3& start_cov);
   /// Where finish() saves the map (core/map/map_store.hpp); empty: nowhere.
   void saveMapTo(std::string dir) { save_map_dir_ = std::move(dir); }
   /// The map of everything so far (graph as it is now), with the effective parameters.
   StoredMap storedMap() const;
 
   const PsmSlam& slam() const { return slam_; }
+  /// One per scan: its pose relative to its reference scan.
+  const std::vector<AnchoredPose>& anchors() const { return anchors_; }
   /// Seconds spent inside the SLAM calls (odometry and scans), without log reading or maps.
   double slamSeconds() const { return slam_seconds_; }
 

@@ -42,16 +42,68 @@ void PsmSlam::start(const Pose2& pose) {
   started_ = true;
 }
 
+void PsmSlam::startClock(int64_t utime) {
+  if (!started_) start(Pose2());
+  if (clock_started_) return;
+  filter_utime_ = utime;
+  clock_started_ = true;
+}
+
+void PsmSlam::continueMap(const PoseGraph& graph, const std::vector<LaserScan>& references, const Pose2& start_pose,
+                          const Mat3& start_cov) {
+  if (clock_started_ || !keyframes_.empty()) throw std::logic_error("continueMap: call it before the first message");
+  if (references.size() != graph.nodes().size())
+    throw std::invalid_argument("the map has " + std::to_string(graph.nodes().size()) + " graph nodes but " +
+                                std::to_string(references.size()) + " reference scans");
+  for (size_t i = 0; i < references.size(); ++i) {
+    const int64_t id = static_cast<int64_t>(i);
+    if (graph.nodes()[i].id != id)
+      throw std::invalid_argument("the map's graph nodes are not numbered 0.." + std::to_string(references.size() - 1));
+    std::optional<PreparedScan> prepared = prepareMatchableScan(references[i], params_.psm);
+    keyframes_.push_back({id, references[i].utime, references[i].laser_pose, prepared ? std::move(*prepared) : PreparedScan{}});
+  }
+  graph_ = graph;
+  map_keyframes_ = static_cast<int64_t>(keyframes_.size());
+  keyframes_at_last_optimization_ = map_keyframes_;
+  filter_.reset(start_pose, start_cov);
+  last_scan_pose_ = start_pose;
+  started_ = true;
+  addMapSkeleton(start_pose);
+}
+
+void PsmSlam::addMapSkeleton(const Pose2& start_pose) {
+  // The map's poses are the frame this run continues in: known to about a millimetre.
+  const Mat3 known = covarianceFloor(1e-3, 1e-4);
+  std::optional<int64_t> nearest;
+  double nearest_distance = 0.0;
+  for (const Keyframe& k : keyframes_) {
+    if (k.scan.size() == 0) continue;
+    const Pose2 pose = graph_.node(k.id).pose;
+    const bool covered = std::any_of(skeleton_.begin(), skeleton_.end(), [&](int64_t kept) {
+      const Pose2 other = graph_.node(kept).pose;
+      return (other.translation() - pose.translation()).norm() < params_.skeleton_spacing &&
+             std::abs(wrapAngle(other.theta - pose.theta)) < params_.skeleton_heading;
+    });
+    if (covered) continue;
+    filter_.addIndependentKeyframe(k.id, pose, known);
+    filter_keyframes_.insert(k.id);
+    skeleton_.insert(k.id);
+    const double distance = (pose.translation() - start_pose.translation()).norm();
+    if (!nearest || distance < nearest_distance) nearest = k.id, nearest_distance = distance;
+  }
+  if (!nearest) throw std::invalid_argument("no reference scan of the map can be matched");
+  for (Keyframe& k : keyframes_)
+    if (!skeleton_.count(k.id)) k.scan = PreparedScan{};  // never matched, as after marginalisation
+  filter_.setActiveKeyframe(*nearest);
+}
+
 void PsmSlam::addOdometry(const OdometryReading& reading) {
   const OdometryMotionResult result = odometry_.add(reading);
   if (!result.ok()) {
     ++stats_.odometry_rejected;
     return;
   }
-  if (!started_) {
-    start(Pose2());
-    filter_utime_ = reading.utime;
-  }
+  startClock(reading.utime);
   have_odometry_ = true;
   const OdometryMotion& motion = *result.motion;
   const Mat3 Ja = composeJacobianA(pending_motion_, motion.delta), Jb = composeJacobianB(pending_motion_);
@@ -232,7 +284,12 @@ bool PsmSlam::needsNewReference(const std::optional<Observation>& tracked) {
   return reason != nullptr;
 }
 
-bool PsmSlam::isOld(int64_t id) const { return filter_.activeKeyframe() - id >= params_.loop_min_keyframe_gap; }
+bool PsmSlam::isOld(int64_t id) const {
+  const int64_t active = filter_.activeKeyframe();
+  // A continued map's keyframes and this run's are tied only through matches: always a loop.
+  if ((id < map_keyframes_) != (active < map_keyframes_)) return true;
+  return active - id >= params_.loop_min_keyframe_gap;
+}
 
 std::vector<PsmSlam::Candidate> PsmSlam::referenceCandidates() const {
   const double reuse_distance = params_.reuse_fraction * params_.keyframe_distance;
@@ -275,6 +332,7 @@ bool PsmSlam::selectReference(const LaserScan& scan, PreparedScan& prepared, con
   bool wide_search_done = false;
   for (const Candidate& c : referenceCandidates()) {
     ++stats_.candidate_matches;
+    if (c.id < map_keyframes_) ++stats_.map_candidate_matches;
     // One wide (many-guess) search per decision: it is the expensive part of loop closure.
     const bool wide = c.old && !wide_search_done;
     wide_search_done = wide_search_done || wide;
@@ -294,6 +352,7 @@ bool PsmSlam::selectReference(const LaserScan& scan, PreparedScan& prepared, con
     if (applyLoopClosure(c, *o)) {
       accepted.push_back(*o);
       loop = true;
+      if (c.id < map_keyframes_) ++stats_.map_loop_closures;
     }
   }
   const Observation* reuse = nullptr;
@@ -484,10 +543,7 @@ void PsmSlam::record(int64_t utime, PsmSlamScanResult& result) {
 PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
   ++stats_.scans;
   PsmSlamScanResult result;
-  if (!started_) {
-    start(Pose2());
-    filter_utime_ = scan.utime;
-  }
+  startClock(scan.utime);
   predictTo(scan.utime);
   std::optional<PreparedScan> prepared = prepareMatchableScan(scan, params_.psm);
   if (!prepared) {

@@ -55,6 +55,8 @@ struct PsmSlamStats {
   size_t reference_reuses = 0;     ///< an existing reference scan taken up again
   size_t candidate_matches = 0;    ///< matches tried against candidate reference scans
   size_t loop_closures = 0;        ///< accepted matches with old reference scans
+  size_t map_candidate_matches = 0;  ///< continuing a map: matches tried with its reference scans
+  size_t map_loop_closures = 0;      ///< ... and accepted
   size_t loop_failed_matches = 0;  ///< old candidates PSM did not converge on
   size_t loop_poor_matches = 0;    ///< ... converged, but error index or overlap too poor
   size_t loop_ambiguous = 0;       ///< ... good, but another start in the prior found an equally good place
@@ -85,6 +87,14 @@ class PsmSlam {
  public:
   explicit PsmSlam(PsmSlamParams params = {});
 
+  /// Continues a saved map (call before any message): its pose graph and its reference scans
+  /// (`references[i]` the scan of node i; node ids 0..n−1) become this run's first keyframes,
+  /// and the robot starts at `start` (map frame) with covariance `start_cov`. The map's keyframes
+  /// join the filter as known poses, thinned as the skeleton is; matches with them are loop
+  /// closures. Throws std::invalid_argument for a graph the scans do not cover or with no
+  /// matchable scan.
+  void continueMap(const PoseGraph& graph, const std::vector<LaserScan>& references, const Pose2& start,
+                   const Mat3& start_cov);
   /// Cumulative odometry. Bad readings are counted and ignored.
   void addOdometry(const OdometryReading& reading);
   /// One laser scan; never throws for bad content (malformed scans count as unusable).
@@ -97,8 +107,11 @@ class PsmSlam {
   const PoseGraph& graph() const { return graph_; }
   const PsmSlamStats& stats() const { return stats_; }
   const PsmSlamParams& params() const { return params_; }
-  /// Whether anything has been received yet (the map frame is set by the first message).
-  bool started() const { return started_; }
+  /// Whether anything has been received yet (the map frame is set by the first message, unless
+  /// a saved map is continued).
+  bool started() const { return clock_started_; }
+  /// Keyframes that came from a continued map (ids below this).
+  int64_t mapKeyframes() const { return map_keyframes_; }
   Pose2 currentPose() const { return filter_.robotPose(); }
   const PsmSlamFilter& filter() const { return filter_; }
 
@@ -137,6 +150,9 @@ class PsmSlam {
   };
 
   void start(const Pose2& pose);
+  /// The first message's time starts the filter's clock.
+  void startClock(int64_t utime);
+  void addMapSkeleton(const Pose2& start);
   void predictTo(int64_t utime);
   std::optional<Observation> matchKeyframe(const Keyframe& keyframe, const PreparedScan& scan, const Pose2& mount,
                                            const RelativePosePrediction& prior, bool loop_candidate, bool wide_search);
@@ -184,7 +200,9 @@ class PsmSlam {
   std::vector<TrajectoryRecord> records_;
   PsmSlamStats stats_;
 
-  bool started_ = false;
+  bool started_ = false;                   ///< the filter holds a robot pose
+  bool clock_started_ = false;             ///< a message has set filter_utime_
+  int64_t map_keyframes_ = 0;              ///< keyframes of a continued map: ids 0 .. this − 1
   OdometryIntegrator odometry_;
   bool have_odometry_ = false;
   Pose2 pending_motion_;                   ///< odometry since the last scan

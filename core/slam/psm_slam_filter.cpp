@@ -143,6 +143,19 @@ void PsmSlamFilter::addKeyframe(int64_t id) {
   loadLocal();
 }
 
+void PsmSlamFilter::addIndependentKeyframe(int64_t id, const Pose2& pose, const Mat3& cov) {
+  if (hasKeyframe(id)) throw std::invalid_argument("keyframe " + std::to_string(id) + " is already in the filter");
+  flush();
+  const size_t slot = allocateSlot();
+  const Eigen::Index s = offset(slot), n = static_cast<Eigen::Index>(dimension());
+  x_.segment<3>(s) = pose.vec();
+  P_.block(s, 0, 3, n).setZero();
+  P_.block(0, s, n, 3).setZero();
+  P_.block<3, 3>(s, s) = cov;
+  slot_of_[id] = slot;
+  loadLocal();
+}
+
 void PsmSlamFilter::removeKeyframe(int64_t id) {
   if (id == active_id_) throw std::logic_error("the active keyframe cannot be removed from the filter");
   const size_t slot = slotOf(id);

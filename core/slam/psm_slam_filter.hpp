@@ -50,6 +50,9 @@ class PsmSlamFilter {
 
   /// Stores the robot's current pose as keyframe `id` (new) and makes it the active keyframe.
   void addKeyframe(int64_t id);
+  /// Adds keyframe `id` at `pose` with covariance `cov`, independent of the robot and of the other
+  /// keyframes (a reference scan of a saved map). The active keyframe stays.
+  void addIndependentKeyframe(int64_t id, const Pose2& pose, const Mat3& cov);
   /// Marginalises a keyframe out of the filter (the pose graph keeps it). Not the active one.
   void removeKeyframe(int64_t id);
   /// Makes `id` the keyframe the next updates are expected to involve.

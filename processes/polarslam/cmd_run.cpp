@@ -16,6 +16,7 @@
 #include "io/tum.hpp"
 #include "offline_log.hpp"
 #include "pipeline/pipelines.hpp"
+#include "pipeline/map_continuation_estimator.hpp"
 #include "pipeline/map_localization_estimator.hpp"
 #include "map/map_store.hpp"
 #include "pipeline/psm_slam_estimator.hpp"
@@ -59,11 +60,16 @@ std::unique_ptr<Estimator> makeEstimator(const RunOptions& o) {
     return estimator;
   }
   if (o.pipeline != "psm-slam") throw std::runtime_error("--load-map goes with --pipeline psm-slam");
-  if (!o.save_map.empty()) throw std::runtime_error("--mode localize adds nothing to the map: no --save-map");
   std::optional<Pose2> start;
   if (!o.initial_pose.empty()) start = parseInitialPose(o.initial_pose);
-  return std::make_unique<MapLocalizationEstimator>(loadMap(o.load_map), loadPsmSlamEstimatorConfig(o.pipeline_options.config),
-                                                    start);
+  PsmSlamEstimatorConfig config = loadPsmSlamEstimatorConfig(o.pipeline_options.config);
+  if (o.mode == "continue") {
+    auto estimator = std::make_unique<MapContinuationEstimator>(loadMap(o.load_map), std::move(config), start);
+    estimator->saveMapTo(o.save_map);
+    return estimator;
+  }
+  if (!o.save_map.empty()) throw std::runtime_error("--mode localize adds nothing to the map: no --save-map");
+  return std::make_unique<MapLocalizationEstimator>(loadMap(o.load_map), std::move(config), start);
 }
 
 std::atomic<int> stop_signal{0};
@@ -344,8 +350,10 @@ void setupRun(CLI::App& sub) {
                  "with --pipeline psm-slam: a map saved by --save-map to work in (see --mode)")
       ->check(CLI::ExistingDirectory);
   sub.add_option("--mode", o->mode,
-                 "with --load-map: localize = match against the stored reference scans and add none")
-      ->check(CLI::IsMember({"localize"}))->capture_default_str();
+                 "with --load-map: localize = match against the stored reference scans and add none; continue = "
+                 "map on from the stored map (new reference scans and loop closures join its graph; --save-map "
+                 "saves the whole)")
+      ->check(CLI::IsMember({"localize", "continue"}))->capture_default_str();
   sub.add_option("--initial-pose", o->initial_pose,
                  "with --load-map: the start in the map frame, x,y,theta (m, m, rad); without it the start is "
                  "searched among the reference scans");
