@@ -1,6 +1,7 @@
 #include "grid/graph_scan_store.hpp"
 
 #include <chrono>
+#include <stdexcept>
 
 namespace polarslam {
 
@@ -22,9 +23,17 @@ void GraphScanStore::add(LaserScan scan, const AnchoredPose& anchor) {
   keep(std::move(scan), anchor);
 }
 
+void GraphScanStore::addStored(LaserScan scan, const AnchoredPose& anchor) {
+  if (anchors_.size() > stored_) throw std::logic_error("GraphScanStore: a continued map's scans come first");
+  ++stored_;
+  scans_.push_back(std::move(scan));
+  anchors_.push_back(anchor);
+  ++version_;
+}
+
 void GraphScanStore::keep(LaserScan scan, const AnchoredPose& anchor) {
   if (!(all_scans_ || anchor.new_node)) return;
-  if (!anchors_.empty() && anchor.utime <= anchors_.back().utime) return;  // repeated or out of order
+  if (anchors_.size() > stored_ && anchor.utime <= anchors_.back().utime) return;  // repeated or out of order
   scan.ranges.shrink_to_fit();
   scans_.push_back(std::move(scan));
   anchors_.push_back(anchor);

@@ -46,6 +46,9 @@ class GraphScanStore {
   void addAnchor(const AnchoredPose& anchor);
   /// An already paired scan.
   void add(LaserScan scan, const AnchoredPose& anchor);
+  /// A reference scan of a continued map (before any other): kept whatever its time, which may
+  /// well be that of this run's scans when the same log is replayed.
+  void addStored(LaserScan scan, const AnchoredPose& anchor);
 
   size_t size() const { return scans_.size(); }
   /// Incremented whenever the kept set changes.
@@ -63,6 +66,7 @@ class GraphScanStore {
   ScanPairing<AnchoredPose> pending_;
   std::vector<LaserScan> scans_;
   std::vector<AnchoredPose> anchors_;
+  size_t stored_ = 0;  ///< scans of a continued map, at the front
   GraphScanStoreStatistics stats_;
   uint64_t version_ = 0;
 };

@@ -84,7 +84,7 @@ void PsmSlamEstimator::continueMap(const StoredMap& map, const Pose2& start, con
                                 std::to_string(map.graph.nodes()[static_cast<size_t>(missing - found.begin())].id) +
                                 ": it cannot be continued");
   slam_.continueMap(map.graph, references, start, start_cov);
-  for (const MapReferenceScan& s : map.scans) map_scans_.add(s.scan, s.anchor);
+  for (const MapReferenceScan& s : map.scans) map_scans_.addStored(s.scan, s.anchor);
 }
 
 nlohmann::json psmSlamReportJson(const PsmSlam& slam, const PoseGraphOptimizationSummary& final_optimization) {

@@ -1,6 +1,6 @@
-// polarslam run --load-map M --mode localize (issue 15, item 2) end to end: the default log's
-// map saved by one run, the same log localised in it from a known start by another, and the
-// option mistakes a user can make refused with a message.
+// polarslam run --load-map M --mode localize|continue (issue 15, item 2) end to end: the default
+// log's map saved by one run, the same log localised in it from a known start by another and
+// mapped on from it by a third, and the option mistakes a user can make refused with a message.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -19,7 +19,7 @@ using polarslam::testing::sourcePath;
 namespace {
 namespace fs = std::filesystem;
 
-TEST(LocalizeCli, TheDefaultLogLocalisesInItsOwnSavedMapAndBadOptionsAreRefused) {
+TEST(LocalizeCli, TheDefaultLogLocalisesInAndContinuesItsOwnSavedMapAndBadOptionsAreRefused) {
   const fs::path dir = freshDir("localize-it");
   const std::string log = sourcePath("logs/office.lcmlog"), config = sourcePath("config/psm-slam.yaml");
   const std::string map = (dir / "map").string();
@@ -43,6 +43,22 @@ TEST(LocalizeCli, TheDefaultLogLocalisesInItsOwnSavedMapAndBadOptionsAreRefused)
   EXPECT_LT(report["ate_rmse_m"].get<double>(), 0.10) << "the map's frame is the mapping run's start frame";
   EXPECT_TRUE(fs::exists(dir / "localize" / "map.png"));
   EXPECT_TRUE(fs::exists(dir / "localize" / "trajectory.tum"));
+
+  // --mode continue maps on from the saved map and saves the whole, old and new parts.
+  const std::string extended = (dir / "extended").string();
+  ASSERT_EQ(runToEnd({binPath("polarslam"), "run", "--log", log, "--pipeline", "psm-slam", "--config", config,
+                      "--load-map", map, "--mode", "continue", "--initial-pose", "0,0,0", "--save-map", extended,
+                      "--out", (dir / "continue").string()},
+                     dir / "continue.out", 300s),
+            0)
+      << readFile(dir / "continue.out");
+  const nlohmann::json continued = readJson(dir / "continue" / "report.json");
+  EXPECT_LT(continued["ate_rmse_m"].get<double>(), 0.10) << continued.dump(2);
+  EXPECT_GT(continued["psm_slam"]["map_loop_closures"].get<int>(), 0) << continued["psm_slam"].dump(2);
+  const int map_nodes = continued["localization"]["map_reference_scans"].get<int>();
+  EXPECT_GT(continued["saved_map"]["nodes"].get<int>(), map_nodes);
+  EXPECT_EQ(continued["saved_map"]["reference_scans"], continued["saved_map"]["nodes"]);
+  ASSERT_EQ(runToEnd({binPath("polarslam"), "map-check", extended}, dir / "check.out", 60s), 0) << readFile(dir / "check.out");
 
   const std::vector<std::pair<std::vector<std::string>, std::string>> mistakes{
       {{"--pipeline", "psm-slam", "--load-map", map, "--initial-pose", "1,2"}, "expected x,y,theta"},

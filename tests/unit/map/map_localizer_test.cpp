@@ -1,6 +1,7 @@
-// Localisation in a stored map (issue 15, items 2-3): a simulated corridor loop is mapped once,
-// then other runs in the same building are localised in that map: from an unknown start, and
-// after the robot is carried elsewhere (kidnapped) while its odometry noticed nothing.
+// Localisation in a stored map and mapping on from it (issue 15, items 2-3): a simulated corridor
+// loop is mapped once, then other runs in the same building are localised in that map (from an
+// unknown start, and after the robot is carried elsewhere while its odometry noticed nothing) or
+// continue it.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -8,6 +9,7 @@
 #include <random>
 
 #include "map/map_store.hpp"
+#include "pipeline/map_continuation_estimator.hpp"
 #include "pipeline/psm_slam_estimator.hpp"
 #include "slam/map_localizer.hpp"
 #include "unit/slam/synthetic_run.hpp"
@@ -26,7 +28,7 @@ PsmSlamEstimatorConfig testConfig() {
   return c;
 }
 
-std::vector<MapReference> mapOfOneLap() {
+StoredMap storedMapOfOneLap() {
   SyntheticRunOptions options;
   options.seed = 7;
   const SyntheticRun run = testing::simulateLoopRun(testing::makeLoopWorld(), options);
@@ -37,8 +39,10 @@ std::vector<MapReference> mapOfOneLap() {
   }
   nlohmann::json report;
   mapping.finish("", report);
-  return mapReferences(mapping.storedMap());
+  return mapping.storedMap();
 }
+
+std::vector<MapReference> mapOfOneLap() { return mapReferences(storedMapOfOneLap()); }
 
 /// The loop's true path in the world (the mapping run started at its first pose).
 std::vector<Pose2> loopPathInWorld(int laps) {
@@ -162,6 +166,61 @@ TEST(MapLocalizer, AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace) {
   }
   std::printf("kidnap noticed within %zu scans on every seed; found again within 20 scans on %zu of 20 seeds\n",
               latest_notice, found_within_20);
+}
+
+/// Feeds `run` to a continuation of `map`; the final trajectory.
+std::vector<PoseStamped> continueMapping(MapContinuationEstimator& continuation, const SyntheticRun& run,
+                                         nlohmann::json& report) {
+  for (size_t k = 0; k < run.scans.size(); ++k) {
+    continuation.onOdometry(run.odometry[k]);
+    continuation.onLaser(run.scans[k]);
+  }
+  continuation.finish("", report);
+  return continuation.trajectory();
+}
+
+TEST(MapContinuation, AKnownStartMapsOnInTheMapsFrameAndClosesLoopsWithIt) {
+  const StoredMap map = storedMapOfOneLap();
+  std::vector<Pose2> path = loopPathInWorld(2);
+  path.erase(path.begin(), path.begin() + 40);
+  const SyntheticRun run = runAlong(path, 0, Pose2(150.0, -80.0, 2.5), 31);
+  MapContinuationEstimator continuation(map, testConfig(), run.truth.front());
+  nlohmann::json report;
+  const std::vector<PoseStamped> poses = continueMapping(continuation, run, report);
+  ASSERT_EQ(poses.size(), run.truth.size());
+  double worst = 0.0;
+  for (size_t k = 0; k < poses.size(); ++k) worst = std::max(worst, distance(poses[k].pose, run.truth[k]));
+  EXPECT_LT(worst, 0.10) << "m from the truth, in the map's frame";
+  EXPECT_GT(report["psm_slam"]["map_loop_closures"].get<size_t>(), 10u) << report["psm_slam"].dump();
+  // The map grows: its nodes and reference scans stay, new ones join them.
+  const StoredMap extended = continuation.mappingEstimator().storedMap();
+  EXPECT_GT(extended.graph.nodes().size(), map.graph.nodes().size());
+  EXPECT_EQ(extended.scans.size(), extended.graph.nodes().size());
+  // The map's poses are known to about a millimetre in the filter (PsmSlam::continueMap).
+  EXPECT_LT(distance(extended.graph.node(0).pose, map.graph.node(0).pose), 1e-3) << "the map frame moved";
+}
+
+TEST(MapContinuation, AnUnknownStartIsSearchedFirstThenMappingGoesOn) {
+  const StoredMap map = storedMapOfOneLap();
+  std::vector<Pose2> path = loopPathInWorld(2);
+  path.erase(path.begin(), path.begin() + 40);
+  const SyntheticRun run = runAlong(path, 0, Pose2(150.0, -80.0, 2.5), 32);
+  MapContinuationEstimator continuation(map, testConfig(), std::nullopt);
+  nlohmann::json report;
+  const std::vector<PoseStamped> poses = continueMapping(continuation, run, report);
+  ASSERT_TRUE(continuation.mapping()) << "the start was never found";
+  const size_t found = report["localization"]["scans_before_mapping"].get<size_t>();
+  ASSERT_GT(found, 0u);
+  std::printf("continuing from an unknown start: found at scan %zu\n", found - 1);
+  ASSERT_EQ(poses.size(), run.truth.size());
+  for (size_t k = found - 1; k < poses.size(); ++k)
+    EXPECT_LT(distance(poses[k].pose, run.truth[k]), 0.10) << "m from the truth at scan " << k;
+}
+
+TEST(MapContinuation, AMapWhoseNodesLackTheirScansIsRefused) {
+  StoredMap map = storedMapOfOneLap();
+  map.scans.pop_back();
+  EXPECT_THROW(MapContinuationEstimator(map, testConfig(), Pose2()), std::invalid_argument);
 }
 
 }  // namespace
