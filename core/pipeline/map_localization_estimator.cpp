@@ -22,7 +22,7 @@ void MapLocalizationEstimator::onOdometry(const OdometryReading& odometry) {
 
 void MapLocalizationEstimator::onLaser(const LaserScan& scan) {
   const auto start = std::chrono::steady_clock::now();
-  localizer_.addScan(scan);
+  last_result_ = localizer_.addScan(scan);
   seconds_ += secondsSince(start);
 }
 

@@ -32,6 +32,8 @@ class MapLocalizationEstimator : public Estimator {
   void finish(const std::string& out_dir, nlohmann::json& report) override;
 
   const MapLocalizer& localizer() const { return localizer_; }
+  /// What the latest scan gave.
+  const MapLocalizationResult& lastResult() const { return last_result_; }
   double seconds() const { return seconds_; }
 
  private:
@@ -41,6 +43,7 @@ class MapLocalizationEstimator : public Estimator {
   std::vector<PoseStamped> final_;
   bool finished_ = false;
   double seconds_ = 0.0;
+  MapLocalizationResult last_result_;
 };
 
 }  // namespace polarslam

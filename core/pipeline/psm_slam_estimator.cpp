@@ -62,11 +62,11 @@ void PsmSlamEstimator::onOdometry(const OdometryReading& odometry) {
 
 void PsmSlamEstimator::onLaser(const LaserScan& scan) {
   const auto start = std::chrono::steady_clock::now();
-  const PsmSlamScanResult result = slam_.addScan(scan);
+  last_result_ = slam_.addScan(scan);
   slam_seconds_ += secondsSince(start);
-  online_.push_back(result.pose);
-  anchors_.push_back(result.anchor);
-  map_scans_.add(scan, result.anchor);
+  online_.push_back(last_result_.pose);
+  anchors_.push_back(last_result_.anchor);
+  map_scans_.add(scan, last_result_.anchor);
 }
 
 void PsmSlamEstimator::continueMap(const StoredMap& map, const Pose2& start, const Mat3& start_cov) {
@@ -132,7 +132,7 @@ void PsmSlamEstimator::finish(const std::string& out_dir, nlohmann::json& report
   section["slam_seconds"] = slam_seconds_;
   report["psm_slam"] = section;
   if (out_dir.empty()) {
-    if (!save_map_dir_.empty()) saveStoredMap(nullptr, report);
+    if (!save_map_dir_.empty()) saveWithGrid(report);
     return;
   }
   writeMap(out_dir, report);
@@ -169,6 +169,17 @@ StoredMap PsmSlamEstimator::storedMap() const {
   ParameterTable table;
   describePsmSlamEstimatorConfig(table, config);
   return storedMapOf(slam_.graph(), map_scans_.scans(), map_scans_.anchors(), table.yaml());
+}
+
+void PsmSlamEstimator::saveMapNow() const {
+  nlohmann::json ignored;
+  saveWithGrid(ignored);
+}
+
+void PsmSlamEstimator::saveWithGrid(nlohmann::json& report) const {
+  if (map_scans_.size() == 0) return saveStoredMap(nullptr, report);
+  const GraphGrid grid = buildGraphGrid(map_scans_, slam_.graph(), gridOptions(config_.map));
+  saveStoredMap(&grid.grid, report);
 }
 
 void PsmSlamEstimator::saveStoredMap(const OccupancyGrid* grid, nlohmann::json& report) const {

@@ -61,6 +61,11 @@ class PsmSlamEstimator : public Estimator {
   void saveMapTo(std::string dir) { save_map_dir_ = std::move(dir); }
   /// The map of everything so far (graph as it is now), with the effective parameters.
   StoredMap storedMap() const;
+  /// Saves storedMap() with its grid to the saveMapTo() folder now (a live SAVE_MAP request).
+  /// Throws MapFormatError.
+  void saveMapNow() const;
+  /// What the latest scan did.
+  const PsmSlamScanResult& lastResult() const { return last_result_; }
 
   const PsmSlam& slam() const { return slam_; }
   /// One per scan: its pose relative to its reference scan.
@@ -71,6 +76,7 @@ class PsmSlamEstimator : public Estimator {
  private:
   void writeMap(const std::string& out_dir, nlohmann::json& report);
   void saveStoredMap(const OccupancyGrid* grid, nlohmann::json& report) const;
+  void saveWithGrid(nlohmann::json& report) const;
 
   PsmSlamEstimatorConfig config_;
   PsmSlam slam_;
@@ -80,6 +86,7 @@ class PsmSlamEstimator : public Estimator {
   GraphScanStore map_scans_;           ///< the scans the map is built from
   double slam_seconds_ = 0.0;
   std::string save_map_dir_;
+  PsmSlamScanResult last_result_;
 };
 
 /// Report figures of a run: counts, optimisation, graph size.

@@ -3,8 +3,10 @@
 // relative to its reference scan) and PSM_SLAM_GRAPH (pose_graph_t: after every optimisation,
 // when the graph has otherwise changed at most every --graph-period seconds, and once more on
 // exit after a final optimisation). With --save-map M it saves its map (core/map/map_store.hpp)
-// on every SAVE_MAP request (map_request_t) and on exit. A thin shell over core/slam/psm_slam.hpp, the class
-// `polarslam run --pipeline psm-slam` runs with the same --config file.
+// on every SAVE_MAP request (map_request_t) and on exit; with --load-map M it localises in a saved
+// map (--mode localize: poses only, no anchors or graph) or maps on from it (--mode continue). A
+// thin shell over core/pipeline/psm_slam_session.hpp, what `polarslam run --pipeline psm-slam`
+// runs with the same options and --config file.
 #include <CLI/CLI.hpp>
 
 #include <chrono>
@@ -15,8 +17,8 @@
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
 #include "common/pose_graph_message.hpp"
-#include "pipeline/psm_slam_estimator.hpp"
-#include "map_saving.hpp"
+#include "map/map_store.hpp"
+#include "pipeline/psm_slam_session.hpp"
 #include "polarslam/map_request_t.hpp"
 #include "slam/psm_slam.hpp"
 
@@ -55,6 +57,22 @@ class GraphPublisher {
   int64_t seq_ = 0;
 };
 
+/// One line of what the run did, from its report figures.
+std::string exitSummary(const nlohmann::json& report) {
+  auto count = [](const nlohmann::json& section, const char* key) { return std::to_string(section.value(key, 0)); };
+  std::string line;
+  if (report.contains("localization")) {
+    const nlohmann::json& l = report["localization"];
+    line = "localisation: " + count(l, "fixes") + " fixes, " + count(l, "losses") + " losses; ";
+  }
+  if (report.contains("psm_slam")) {
+    const nlohmann::json& p = report["psm_slam"];
+    line += count(p, "scans") + " scans, " + count(p, "keyframes") + " reference scans, " + count(p, "loop_closures") +
+            " loop closures, " + count(p, "optimizations") + " optimisations";
+  }
+  return line;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -74,26 +92,34 @@ int main(int argc, char** argv) {
   app.add_option("--pose-channel", channels.pose, "channel of the robot poses (pose_t)")->capture_default_str();
   app.add_option("--anchors-channel", channels.anchors, "poses relative to their reference scan")->capture_default_str();
   app.add_option("--graph-channel", channels.graph, "channel of the pose graph (pose_graph_t)")->capture_default_str();
-  std::string save_map;
-  app.add_option("--save-map", save_map,
+  SavedMapOptions map_options;
+  std::string initial_pose;
+  app.add_option("--save-map", map_options.save_map,
                  "save the map (pose graph, reference scans, grid, parameters) to this folder on exit and on "
                  "every SAVE_MAP request, replacing the older map only once the new one is complete");
   app.add_option("--save-map-channel", channels.save_map, "channel of the save requests (map_request_t)")
       ->capture_default_str();
+  app.add_option("--load-map", map_options.load_map, "a map saved by --save-map to work in (see --mode)")
+      ->check(CLI::ExistingDirectory);
+  app.add_option("--mode", map_options.mode,
+                 "with --load-map: localize = match against the stored reference scans and add none; continue = "
+                 "map on from the stored map")
+      ->check(CLI::IsMember({"localize", "continue"}))->capture_default_str();
+  app.add_option("--initial-pose", initial_pose,
+                 "with --load-map: the start in the map frame, x,y,theta (m, m, rad); without it the start is "
+                 "searched among the reference scans");
   JournalOptions journal;
   addJournalOptions(app, journal);
   addPrintConfigFlag(app, [&] { return effectiveConfigYaml("psm-slam", {"fused", config}); });
   CLI11_PARSE(app, argc, argv);
 
   try {
-    const PsmSlamEstimatorConfig estimator_config =
-        config.empty() ? PsmSlamEstimatorConfig{} : loadPsmSlamEstimatorConfig(config);
-    PsmSlam slam(estimator_config.slam);
-    LiveMapSaver map_saver(save_map, estimator_config);
+    if (!initial_pose.empty()) map_options.initial_pose = parseInitialPose(initial_pose);
+    PsmSlamSession session(loadPsmSlamEstimatorConfig(config), map_options);
     auto save = [&](const char* why) {
       try {
-        map_saver.save(slam);
-        std::cerr << "polarslam-psm-slam: map saved to " << map_saver.folder() << " (" << why << ")\n";
+        session.saveMapNow();
+        std::cerr << "polarslam-psm-slam: map saved to " << session.saveMapFolder() << " (" << why << ")\n";
         return true;
       } catch (const std::exception& e) {
         std::cerr << "polarslam-psm-slam: map not saved (" << why << "): " << e.what() << "\n";
@@ -104,37 +130,42 @@ int main(int argc, char** argv) {
     context.enableJournal(journal);
     GraphPublisher graph(context, channels.graph, graph_period);
     int64_t pose_seq = 0, anchor_seq = 0, last_utime = 0;
+    auto publishGraph = [&](bool force) {
+      if (const PsmSlam* slam = session.slam()) graph.publishIfDue(*slam, last_utime, force);
+    };
     context.subscribeConverted<polarslam::laser_scan_t, LaserScan>(channels.laser, [&](LaserScan& scan) {
-      const PsmSlamScanResult r = slam.addScan(scan);
+      const PsmSlamScanOutput r = session.onLaser(scan);
       if (!r.usable) context.reject("laser: too few usable readings to match");
       context.publish(channels.pose, toLcm(r.pose, "map", pose_seq++));
-      context.publish(channels.anchors, toLcm(r.anchor, anchor_seq++));
-      map_saver.onScan(scan, r.anchor);
-      if (r.new_keyframe || r.loop_closed || r.optimized) graph.changed();
+      if (r.anchor) context.publish(channels.anchors, toLcm(*r.anchor, anchor_seq++));
+      if (r.graph_changed) graph.changed();
       last_utime = scan.utime;
-      graph.publishIfDue(slam, last_utime, r.optimized);
+      publishGraph(r.optimized);
       context.handled();
     });
     context.subscribeConverted<polarslam::odometry_t, OdometryReading>(channels.odometry, [&](OdometryReading& reading) {
-      slam.addOdometry(reading);
+      session.onOdometry(reading);
       context.handled();
     });
     context.subscribe<polarslam::map_request_t>(channels.save_map, [&](const polarslam::map_request_t&) {
-      if (!map_saver.enabled()) return context.reject("SAVE_MAP: no --save-map folder");
+      if (!session.savesMap()) return context.reject("SAVE_MAP: no --save-map folder");
       if (!save("request")) return context.reject("SAVE_MAP: saving failed");
       context.handled();
     });
-    context.run({}, [&] { graph.publishIfDue(slam, last_utime); });
+    context.run({}, [&] { publishGraph(false); });
+    if (!session.started()) return 0;
+    nlohmann::json report;
     bool saved = true;
-    if (slam.started()) {
-      slam.optimize();
-      graph.changed();
-      graph.publishIfDue(slam, last_utime, true);
-      if (map_saver.enabled()) saved = save("exit");
+    try {
+      report = session.finish();  // the final optimisation, and the map saved with --save-map
+      if (session.savesMap()) std::cerr << "polarslam-psm-slam: map saved to " << session.saveMapFolder() << " (exit)\n";
+    } catch (const MapFormatError& e) {  // the optimisation has run: its graph still goes out
+      std::cerr << "polarslam-psm-slam: map not saved (exit): " << e.what() << "\n";
+      saved = false;
     }
-    const PsmSlamStats& s = slam.stats();
-    std::cerr << "polarslam-psm-slam: " << s.scans << " scans, " << s.keyframes << " reference scans, "
-              << s.loop_closures << " loop closures, " << s.optimizations << " optimisations\n";
+    graph.changed();
+    publishGraph(true);
+    std::cerr << "polarslam-psm-slam: " << exitSummary(report) << "\n";
     if (!saved) return 1;
   } catch (const std::exception& e) {
     std::cerr << "polarslam-psm-slam: " << e.what() << "\n";

@@ -16,8 +16,7 @@
 #include "io/tum.hpp"
 #include "offline_log.hpp"
 #include "pipeline/pipelines.hpp"
-#include "pipeline/map_continuation_estimator.hpp"
-#include "pipeline/map_localization_estimator.hpp"
+#include "pipeline/psm_slam_session.hpp"
 #include "map/map_store.hpp"
 #include "pipeline/psm_slam_estimator.hpp"
 
@@ -37,39 +36,21 @@ struct RunOptions {
   std::string initial_pose;  ///< "x,y,theta" in the map frame (m, m, rad); empty: search globally
 };
 
-/// "x,y,theta" (m, m, rad) as a pose; throws naming the option otherwise.
-Pose2 parseInitialPose(const std::string& text) {
-  std::istringstream in(text);
-  double v[3];
-  char comma1 = 0, comma2 = 0;
-  if (!(in >> v[0] >> comma1 >> v[1] >> comma2 >> v[2]) || comma1 != ',' || comma2 != ',' || !(in >> std::ws).eof() ||
-      !std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
-    throw std::runtime_error("--initial-pose '" + text + "': expected x,y,theta (m, m, rad), three finite numbers");
-  return Pose2(v[0], v[1], v[2]);
-}
-
-/// The estimator of a run: the pipeline's, or with --load-map localisation in the stored map.
-/// Refuses options that do not go together.
+/// The estimator of a run: the pipeline's, or PSM SLAM with its map options. Refuses options
+/// that do not go together.
 std::unique_ptr<Estimator> makeEstimator(const RunOptions& o) {
-  if (!o.save_map.empty() && o.pipeline != "psm-slam")
-    throw std::runtime_error("--save-map goes with --pipeline psm-slam");
-  if (o.load_map.empty()) {
-    if (!o.initial_pose.empty()) throw std::runtime_error("--initial-pose goes with --load-map");
-    std::unique_ptr<Estimator> estimator = pipelines().at(o.pipeline)(o.pipeline_options);
-    if (auto* psm_slam = dynamic_cast<PsmSlamEstimator*>(estimator.get())) psm_slam->saveMapTo(o.save_map);
-    return estimator;
+  if (o.pipeline == "psm-slam") {
+    SavedMapOptions map;
+    map.load_map = o.load_map;
+    map.mode = o.mode;
+    map.save_map = o.save_map;
+    if (!o.initial_pose.empty()) map.initial_pose = parseInitialPose(o.initial_pose);
+    return makePsmSlamEstimator(loadPsmSlamEstimatorConfig(o.pipeline_options.config), map);
   }
-  if (o.pipeline != "psm-slam") throw std::runtime_error("--load-map goes with --pipeline psm-slam");
-  std::optional<Pose2> start;
-  if (!o.initial_pose.empty()) start = parseInitialPose(o.initial_pose);
-  PsmSlamEstimatorConfig config = loadPsmSlamEstimatorConfig(o.pipeline_options.config);
-  if (o.mode == "continue") {
-    auto estimator = std::make_unique<MapContinuationEstimator>(loadMap(o.load_map), std::move(config), start);
-    estimator->saveMapTo(o.save_map);
-    return estimator;
-  }
-  if (!o.save_map.empty()) throw std::runtime_error("--mode localize adds nothing to the map: no --save-map");
-  return std::make_unique<MapLocalizationEstimator>(loadMap(o.load_map), std::move(config), start);
+  if (!o.save_map.empty()) throw std::runtime_error("--save-map goes with --pipeline psm-slam");
+  if (!o.load_map.empty()) throw std::runtime_error("--load-map goes with --pipeline psm-slam");
+  if (!o.initial_pose.empty()) throw std::runtime_error("--initial-pose goes with --load-map");
+  return pipelines().at(o.pipeline)(o.pipeline_options);
 }
 
 std::atomic<int> stop_signal{0};

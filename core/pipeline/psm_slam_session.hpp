@@ -1,0 +1,71 @@
+#pragma once
+// PSM SLAM with its map options, as `polarslam run --pipeline psm-slam` and the live
+// polarslam-psm-slam both run it: mapping from scratch, localisation in a saved map (--load-map M
+// --mode localize) or mapping on from one (--mode continue), with --initial-pose and --save-map.
+// The offline run feeds the estimator from a log; the live process feeds the same estimator from
+// LCM and publishes what each scan gave (PsmSlamSession::onLaser), so both give the same poses.
+#include <nlohmann/json.hpp>
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "pipeline/estimator.hpp"
+#include "pipeline/map_continuation_estimator.hpp"
+#include "pipeline/map_localization_estimator.hpp"
+#include "pipeline/psm_slam_estimator.hpp"
+
+namespace polarslam {
+
+struct SavedMapOptions {
+  std::string load_map;               ///< a saved map to work in; empty: map from scratch
+  std::string mode = "localize";      ///< with load_map: localize | continue
+  std::optional<Pose2> initial_pose;  ///< with load_map: the start in the map frame; none: searched
+  std::string save_map;               ///< folder the map is saved to (not when localising)
+};
+
+/// "x,y,theta" (m, m, rad); throws std::runtime_error naming --initial-pose otherwise.
+Pose2 parseInitialPose(const std::string& text);
+
+/// The estimator for `options`. Throws std::runtime_error for options that do not go together
+/// and MapFormatError for a bad saved map.
+std::unique_ptr<Estimator> makePsmSlamEstimator(PsmSlamEstimatorConfig config, const SavedMapOptions& options);
+
+/// What one scan gave, for publishing.
+struct PsmSlamScanOutput {
+  PoseStamped pose;                    ///< robot pose in the map frame now
+  std::optional<AnchoredPose> anchor;  ///< the same relative to a graph node (none when localising)
+  bool usable = false;                 ///< the scan could be matched at all
+  bool graph_changed = false;          ///< new reference scan, loop closure or optimisation
+  bool optimized = false;
+};
+
+class PsmSlamSession {
+ public:
+  PsmSlamSession(PsmSlamEstimatorConfig config, const SavedMapOptions& options);
+
+  void onOdometry(const OdometryReading& reading);
+  PsmSlamScanOutput onLaser(const LaserScan& scan);
+  /// Whether any message has come in.
+  bool started() const { return started_; }
+  /// The SLAM whose graph is published: none while localising or searching a continued map's start.
+  const PsmSlam* slam() const;
+  bool savesMap() const { return !save_map_.empty(); }
+  const std::string& saveMapFolder() const { return save_map_; }
+  /// Saves the map as it is now, with its grid (a SAVE_MAP request). Throws MapFormatError.
+  void saveMapNow() const;
+  /// At the end: the final optimisation and, with --save-map, the map saved. The report figures.
+  nlohmann::json finish();
+
+ private:
+  const PsmSlamEstimator* mapping() const;
+
+  std::unique_ptr<Estimator> estimator_;
+  PsmSlamEstimator* scratch_ = nullptr;               ///< mapping from scratch
+  MapContinuationEstimator* continuation_ = nullptr;  ///< --mode continue
+  MapLocalizationEstimator* localization_ = nullptr;  ///< --mode localize
+  std::string save_map_;
+  bool started_ = false;
+};
+
+}  // namespace polarslam

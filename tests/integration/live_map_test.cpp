@@ -1,0 +1,122 @@
+// The live polarslam-psm-slam with its map options (issue 15) next to `polarslam run` with the
+// same ones: the default log played into the process with lcm-logplayer, what it publishes
+// recorded with lcm-logger and scored like any recording. Mapping saves its map on a SAVE_MAP
+// request and on exit; localising and continuing in that map give the offline numbers live.
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "child_process.hpp"
+#include "polarslam/map_request_t.hpp"
+
+using namespace std::chrono_literals;
+using polarslam::testing::binPath;
+using polarslam::testing::ChildProcess;
+using polarslam::testing::freshDir;
+using polarslam::testing::readFile;
+using polarslam::testing::readJson;
+using polarslam::testing::runToEnd;
+using polarslam::testing::sourcePath;
+
+namespace {
+namespace fs = std::filesystem;
+
+const std::string kLog = sourcePath("logs/office.lcmlog");
+const std::string kConfig = sourcePath("config/psm-slam.yaml");
+
+nlohmann::json runOffline(const fs::path& dir, const std::string& name, const std::vector<std::string>& options) {
+  std::vector<std::string> argv{binPath("polarslam"), "run",    "--log", kLog, "--pipeline", "psm-slam", "--config",
+                                kConfig,               "--out", (dir / ("offline-" + name)).string()};
+  argv.insert(argv.end(), options.begin(), options.end());
+  EXPECT_EQ(runToEnd(argv, dir / ("offline-" + name + ".out"), 300s), 0) << readFile(dir / ("offline-" + name + ".out"));
+  return readJson(dir / ("offline-" + name) / "report.json");
+}
+
+void requestSave() {
+  lcm::LCM lcm;
+  polarslam::map_request_t request{};
+  request.utime = 1;
+  lcm.publish("SAVE_MAP", &request);
+}
+
+/// Plays the log into a live polarslam-psm-slam with `options`, records everything, stops the
+/// process (its final graph and saved map), and scores the recorded PSM_SLAM_POSE.
+nlohmann::json runLive(const fs::path& dir, const std::string& name, const std::vector<std::string>& options,
+                       bool save_request = false) {
+  const std::string recorded = (dir / ("live-" + name + ".lcmlog")).string();
+  ChildProcess logger({"lcm-logger", "--quiet", "--force", recorded}, (dir / ("logger-" + name + ".out")).string());
+  std::vector<std::string> argv{binPath("polarslam-psm-slam"), "--config", kConfig};
+  argv.insert(argv.end(), options.begin(), options.end());
+  ChildProcess slam(argv, (dir / ("slam-" + name + ".out")).string());
+  std::this_thread::sleep_for(1500ms);  // both subscribed before the first message
+  ChildProcess player({"lcm-logplayer", "--speed", "8", kLog}, (dir / ("player-" + name + ".out")).string());
+  if (save_request) {
+    std::this_thread::sleep_for(8s);  // about half the log
+    requestSave();
+  }
+  EXPECT_TRUE(player.waitFor(120s)) << "lcm-logplayer did not finish";
+  std::this_thread::sleep_for(1s);
+  slam.signal(SIGINT);
+  EXPECT_TRUE(slam.waitFor(60s));
+  EXPECT_EQ(slam.exitCode(), 0) << readFile(dir / ("slam-" + name + ".out"));
+  logger.signal(SIGINT);
+  EXPECT_TRUE(logger.waitFor(10s));
+  const fs::path scored = dir / ("live-" + name);
+  EXPECT_EQ(runToEnd({binPath("polarslam"), "run", "--log", recorded, "--pipeline", "recorded", "--pose-channel",
+                      "PSM_SLAM_POSE", "--out", scored.string()},
+                     dir / ("scored-" + name + ".out"), 120s),
+            0)
+      << readFile(dir / ("scored-" + name + ".out"));
+  return readJson(scored / "report.json");
+}
+
+double figure(const nlohmann::json& report, const char* key) {
+  return report.contains(key) ? report[key].get<double>() : std::nan("");
+}
+
+TEST(LiveMap, SavesLocalisesAndContinuesLiveAsOffline) {
+  const fs::path dir = freshDir("live-map");
+  const std::string live_map = (dir / "live-map").string(), offline_map = (dir / "offline-map").string();
+
+  const nlohmann::json offline_mapping = runOffline(dir, "mapping", {"--save-map", offline_map});
+  const nlohmann::json live_mapping = runLive(dir, "mapping", {"--save-map", live_map}, true);
+  const std::string mapping_text = readFile(dir / "slam-mapping.out");
+  EXPECT_NE(mapping_text.find("(request)"), std::string::npos) << "no save on the SAVE_MAP request:\n" << mapping_text;
+  EXPECT_NE(mapping_text.find("(exit)"), std::string::npos) << mapping_text;
+  ASSERT_EQ(runToEnd({binPath("polarslam"), "map-check", live_map}, dir / "check.out", 60s), 0) << readFile(dir / "check.out");
+  EXPECT_NE(readFile(dir / "check.out").find(std::to_string(offline_mapping["saved_map"]["nodes"].get<int>()) + " "),
+            std::string::npos)
+      << "the live map has the offline map's node count (" << offline_mapping["saved_map"].dump() << "):\n"
+      << readFile(dir / "check.out");
+
+  // Both later runs work in the map the live process saved.
+  const std::vector<std::string> localize{"--load-map", live_map, "--mode", "localize", "--initial-pose", "0,0,0"};
+  const std::vector<std::string> extend{"--load-map", live_map, "--mode", "continue", "--initial-pose", "0,0,0"};
+  const nlohmann::json offline_localize = runOffline(dir, "localize", localize);
+  const nlohmann::json live_localize = runLive(dir, "localize", localize);
+  const nlohmann::json offline_continue = runOffline(dir, "continue", extend);
+  const nlohmann::json live_continue = runLive(dir, "continue", extend);
+
+  std::printf("PSM SLAM, ATE RMSE [m]   offline final  live final  offline online  live online\n");
+  for (const auto& [name, offline, live] :
+       {std::tuple{"mapping", &offline_mapping, &live_mapping}, std::tuple{"localize", &offline_localize, &live_localize},
+        std::tuple{"continue", &offline_continue, &live_continue}})
+    std::printf("%-24s %13.4f  %10.4f  %14.4f  %11.4f\n", name, figure(*offline, "ate_rmse_m"), figure(*live, "ate_rmse_m"),
+                figure(*offline, "online_ate_rmse_m"), figure(*live, "online_ate_rmse_m"));
+  EXPECT_NEAR(figure(live_mapping, "ate_rmse_m"), figure(offline_mapping, "ate_rmse_m"),
+              0.10 * figure(offline_mapping, "ate_rmse_m"));
+  // Localising publishes poses only: the live figure is the online one.
+  EXPECT_NEAR(figure(live_localize, "ate_rmse_m"), figure(offline_localize, "online_ate_rmse_m"),
+              0.10 * figure(offline_localize, "online_ate_rmse_m"));
+  EXPECT_NEAR(figure(live_continue, "ate_rmse_m"), figure(offline_continue, "ate_rmse_m"),
+              0.10 * figure(offline_continue, "ate_rmse_m"));
+  EXPECT_LT(figure(live_continue, "ate_rmse_m"), 0.10) << "in the map's frame";
+  if (!::testing::Test::HasFailure()) fs::remove_all(dir);
+}
+
+}  // namespace
