@@ -25,6 +25,7 @@ const char* const kManifest = "manifest.json";
 const char* const kGraphFile = "graph.txt";
 const char* const kScansFile = "scans.txt";
 const char* const kParametersFile = "parameters.yaml";
+const char* const kResumeFile = "resume.json";
 
 // ---- numbers that read back bit for bit ------------------------------------------------------
 
@@ -312,6 +313,7 @@ void writeMapFolder(const std::string& folder, const StoredMap& map, const Occup
   add(kGraphFile, graphText(map.graph));
   add(kScansFile, scansText(map.scans));
   add(kParametersFile, map.parameters_yaml);
+  if (!map.resume_json.empty()) add(kResumeFile, map.resume_json);
   if (grid) {
     const GridFiles written = writeGridFiles(folder, *grid);
     for (const std::string& path : {written.ot, written.bt, written.pgm, written.yaml, written.png}) {
@@ -473,6 +475,7 @@ StoredMap loadMap(const std::string& dir, const std::optional<LaserGeometry>& ex
     throw MapFormatError(e.file(), e.what());
   }
   map.parameters_yaml = readCheckedFile(dir, files, kParametersFile);
+  if (files.contains(kResumeFile)) map.resume_json = readCheckedFile(dir, files, kResumeFile);
   for (const MapReferenceScan& reference : map.scans) {
     const std::string mismatch = laserGeometryMismatch(map.laser, laserGeometryOf(reference.scan));
     if (!mismatch.empty())

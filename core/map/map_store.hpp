@@ -6,6 +6,7 @@
 //   M/graph.txt       the pose graph: nodes, edges with covariance, kind and outlier flag
 //   M/scans.txt       the reference scans (ranges and beam geometry) with their graph anchors
 //   M/parameters.yaml the effective psm-slam configuration the map was built with
+//   M/resume.json     only in a crash-recovery snapshot: where the process was (docs/maps.md)
 //   M/map.*           the occupancy grid (core/grid writers), when one is given
 //
 // saveMap writes into a sibling temporary folder, fsyncs every file and the folder, then swaps
@@ -54,6 +55,8 @@ struct StoredMap {
   PoseGraph graph;
   std::vector<MapReferenceScan> scans;
   std::string parameters_yaml;  ///< the effective configuration (ParameterTable::yaml())
+  /// A crash-recovery snapshot's process state (resume.json; empty in a map saved for users).
+  std::string resume_json;
 };
 
 /// A map that cannot be saved or loaded; what() names the file at fault.

@@ -3,22 +3,24 @@
 namespace polarslam {
 
 MapContinuationEstimator::MapContinuationEstimator(StoredMap map, PsmSlamEstimatorConfig config,
-                                                   std::optional<Pose2> initial_pose)
+                                                   std::optional<Pose2> initial_pose, const Mat3& initial_cov,
+                                                   const std::optional<PsmSlamFilterSeed>& seed)
     : map_(std::move(map)), mapping_(config) {
   if (initial_pose) {
-    startMapping(*initial_pose, Mat3::Zero());
+    startMapping(*initial_pose, initial_cov, seed);
   } else {
     localizer_ = std::make_unique<MapLocalizer>(mapReferences(map_), config.slam);
   }
 }
 
-void MapContinuationEstimator::startMapping(const Pose2& pose, const Mat3& cov) {
+void MapContinuationEstimator::startMapping(const Pose2& pose, const Mat3& cov,
+                                            const std::optional<PsmSlamFilterSeed>& seed) {
   if (localizer_) {
     search_report_ = localizationReportJson(*localizer_, 0.0);
     before_mapping_ = localizer_->trajectory();
     localizer_.reset();
   }
-  mapping_.continueMap(map_, pose, cov);
+  mapping_.continueMap(map_, pose, cov, seed);
   // The integrator starts from the latest reading, so no motion since it is lost.
   if (last_odometry_) mapping_.onOdometry(*last_odometry_);
 }

@@ -21,7 +21,10 @@ namespace polarslam {
 class MapContinuationEstimator : public Estimator {
  public:
   /// `initial_pose`: a known start in the map frame; without it the start is searched globally.
-  MapContinuationEstimator(StoredMap map, PsmSlamEstimatorConfig config, std::optional<Pose2> initial_pose);
+  /// `seed`: with an initial pose, a run resumed from its own snapshot (PsmSlam::continueMap).
+  MapContinuationEstimator(StoredMap map, PsmSlamEstimatorConfig config, std::optional<Pose2> initial_pose,
+                           const Mat3& initial_cov = Mat3::Zero(),
+                           const std::optional<PsmSlamFilterSeed>& seed = std::nullopt);
 
   std::string name() const override { return "psm-continue"; }
   void onOdometry(const OdometryReading& odometry) override;
@@ -38,7 +41,7 @@ class MapContinuationEstimator : public Estimator {
   const PsmSlamEstimator& mappingEstimator() const { return mapping_; }
 
  private:
-  void startMapping(const Pose2& pose, const Mat3& cov);
+  void startMapping(const Pose2& pose, const Mat3& cov, const std::optional<PsmSlamFilterSeed>& seed = std::nullopt);
 
   StoredMap map_;
   PsmSlamEstimator mapping_;

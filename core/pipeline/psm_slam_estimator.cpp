@@ -69,7 +69,8 @@ void PsmSlamEstimator::onLaser(const LaserScan& scan) {
   map_scans_.add(scan, last_result_.anchor);
 }
 
-void PsmSlamEstimator::continueMap(const StoredMap& map, const Pose2& start, const Mat3& start_cov) {
+void PsmSlamEstimator::continueMap(const StoredMap& map, const Pose2& start, const Mat3& start_cov,
+                                   const std::optional<PsmSlamFilterSeed>& seed) {
   std::vector<LaserScan> references(map.graph.nodes().size());
   std::vector<bool> found(references.size(), false);
   for (const MapReferenceScan& s : map.scans) {
@@ -83,7 +84,7 @@ void PsmSlamEstimator::continueMap(const StoredMap& map, const Pose2& start, con
     throw std::invalid_argument("the map has no reference scan for graph node " +
                                 std::to_string(map.graph.nodes()[static_cast<size_t>(missing - found.begin())].id) +
                                 ": it cannot be continued");
-  slam_.continueMap(map.graph, references, start, start_cov);
+  slam_.continueMap(map.graph, references, start, start_cov, seed);
   for (const MapReferenceScan& s : map.scans) map_scans_.addStored(s.scan, s.anchor);
 }
 

@@ -56,7 +56,8 @@ class PsmSlamEstimator : public Estimator {
   void finish(const std::string& out_dir, nlohmann::json& report) override;
   /// Continues `map` (before any message): its graph and reference scans are this run's start,
   /// in its frame, and stay in the grid and in a saved map (PsmSlam::continueMap).
-  void continueMap(const StoredMap& map, const Pose2& start, const Mat3& start_cov);
+  void continueMap(const StoredMap& map, const Pose2& start, const Mat3& start_cov,
+                   const std::optional<PsmSlamFilterSeed>& seed = std::nullopt);
   /// Where finish() saves the map (core/map/map_store.hpp); empty: nowhere.
   void saveMapTo(std::string dir) { save_map_dir_ = std::move(dir); }
   /// The map of everything so far (graph as it is now), with the effective parameters.

@@ -1,6 +1,7 @@
 #include "pipeline/psm_slam_session.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
@@ -26,7 +27,9 @@ std::unique_ptr<Estimator> makePsmSlamEstimator(PsmSlamEstimatorConfig config, c
     return estimator;
   }
   if (o.mode == "continue") {
-    auto estimator = std::make_unique<MapContinuationEstimator>(loadMap(o.load_map), std::move(config), o.initial_pose);
+    auto estimator =
+        std::make_unique<MapContinuationEstimator>(loadMap(o.load_map), std::move(config), o.initial_pose, o.initial_cov,
+                                                   o.filter_seed);
     estimator->saveMapTo(o.save_map);
     return estimator;
   }
@@ -55,6 +58,7 @@ const PsmSlam* PsmSlamSession::slam() const {
 
 void PsmSlamSession::onOdometry(const OdometryReading& reading) {
   started_ = true;
+  last_odometry_ = reading;
   estimator_->onOdometry(reading);
 }
 
@@ -89,6 +93,83 @@ nlohmann::json PsmSlamSession::finish() {
   nlohmann::json report;
   estimator_->finish("", report);
   return report;
+}
+
+namespace {
+
+nlohmann::json poseJson(const Pose2& p) { return {p.x, p.y, p.theta}; }
+Pose2 poseFromJson(const nlohmann::json& j) { return Pose2(j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()); }
+
+Mat3 covarianceFromJson(const nlohmann::json& j, const std::string& file) {
+  const std::vector<double> values = j.get<std::vector<double>>();
+  if (values.size() != 9) throw MapFormatError(file, "'" + file + "': a covariance has 9 numbers");
+  return Eigen::Map<const Mat3>(values.data());
+}
+
+}  // namespace
+
+void PsmSlamSession::writeSnapshot(const std::string& dir, nlohmann::json resume) const {
+  const PsmSlamEstimator* m = mapping();
+  if (!m) throw MapFormatError(dir, "no map yet: nothing to snapshot");
+  const PsmSlam& slam = m->slam();
+  // The map's poses are taken as known when resuming: the robot's uncertainty relative to its
+  // reference scan is what it keeps.
+  const int64_t active = slam.filter().activeKeyframe();
+  const RelativePosePrediction relative = slam.filter().predictRelative(active);
+  const Mat3 J = composeJacobianB(slam.filter().keyframePose(active));
+  const Mat3 cov = J * relative.cov * J.transpose();
+  resume["pose"] = poseJson(slam.currentPose());
+  const PsmSlamFilterSeed seed = slam.filterSeed();
+  nlohmann::json keyframes = nlohmann::json::array();
+  for (const auto& [id, keyframe_cov] : seed.keyframes)
+    keyframes.push_back({{"id", id}, {"covariance", std::vector<double>(keyframe_cov.data(), keyframe_cov.data() + 9)}});
+  resume["filter"] = {{"active", seed.active}, {"keyframes", keyframes}};
+  resume["covariance"] = std::vector<double>(cov.data(), cov.data() + 9);
+  if (last_odometry_) {
+    const OdometryReading& o = *last_odometry_;
+    resume["last_odometry"] = {{"utime", o.utime},       {"seq", o.seq},          {"pose", poseJson(o.pose)},
+                               {"left_travel", o.left_travel}, {"right_travel", o.right_travel},
+                               {"v", o.v},               {"omega", o.omega}};
+  }
+  StoredMap map = m->storedMap();
+  map.resume_json = resume.dump(1) + "\n";
+  saveMap(dir, map, nullptr);
+}
+
+std::optional<SessionSnapshot> readSessionSnapshot(const std::string& dir, const SavedMapOptions& options) {
+  if (!std::filesystem::exists(dir)) return std::nullopt;
+  const StoredMap map = loadMap(dir);
+  const std::string file = dir + "/resume.json";
+  if (map.resume_json.empty()) throw MapFormatError(file, "'" + dir + "' is a map, not a snapshot: no resume.json");
+  SessionSnapshot snapshot;
+  try {
+    snapshot.resume = nlohmann::json::parse(map.resume_json);
+    snapshot.options.load_map = dir;
+    snapshot.options.mode = "continue";
+    snapshot.options.save_map = options.save_map;
+    snapshot.options.initial_pose = poseFromJson(snapshot.resume.at("pose"));
+    snapshot.options.initial_cov = covarianceFromJson(snapshot.resume.at("covariance"), file);
+    PsmSlamFilterSeed seed;
+    seed.active = snapshot.resume.at("filter").at("active").get<int64_t>();
+    for (const nlohmann::json& k : snapshot.resume.at("filter").at("keyframes"))
+      seed.keyframes.emplace_back(k.at("id").get<int64_t>(), covarianceFromJson(k.at("covariance"), file));
+    snapshot.options.filter_seed = seed;
+    if (snapshot.resume.contains("last_odometry")) {
+      const nlohmann::json& o = snapshot.resume["last_odometry"];
+      OdometryReading r;
+      r.utime = o.at("utime").get<int64_t>();
+      r.seq = o.at("seq").get<int64_t>();
+      r.pose = poseFromJson(o.at("pose"));
+      r.left_travel = o.at("left_travel").get<double>();
+      r.right_travel = o.at("right_travel").get<double>();
+      r.v = o.at("v").get<double>();
+      r.omega = o.at("omega").get<double>();
+      snapshot.last_odometry = r;
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw MapFormatError(file, "'" + file + "': " + e.what());
+  }
+  return snapshot;
 }
 
 }  // namespace polarslam

@@ -21,6 +21,8 @@ struct SavedMapOptions {
   std::string load_map;               ///< a saved map to work in; empty: map from scratch
   std::string mode = "localize";      ///< with load_map: localize | continue
   std::optional<Pose2> initial_pose;  ///< with load_map: the start in the map frame; none: searched
+  Mat3 initial_cov = Mat3::Zero();    ///< ... and its covariance
+  std::optional<PsmSlamFilterSeed> filter_seed;  ///< continue: resuming a run from its own snapshot
   std::string save_map;               ///< folder the map is saved to (not when localising)
 };
 
@@ -57,6 +59,12 @@ class PsmSlamSession {
   /// At the end: the final optimisation and, with --save-map, the map saved. The report figures.
   nlohmann::json finish();
 
+  /// Crash recovery: whether there is map state to snapshot (mapping, not localising).
+  bool canSnapshot() const { return mapping() != nullptr; }
+  /// Writes the map so far and where the robot is (resume.json with `resume`'s fields added) to
+  /// `dir`, atomically, as a saved map without its grid. Throws MapFormatError.
+  void writeSnapshot(const std::string& dir, nlohmann::json resume) const;
+
  private:
   const PsmSlamEstimator* mapping() const;
 
@@ -66,6 +74,19 @@ class PsmSlamSession {
   MapLocalizationEstimator* localization_ = nullptr;  ///< --mode localize
   std::string save_map_;
   bool started_ = false;
+  std::optional<OdometryReading> last_odometry_;
 };
+
+/// A crash-recovery snapshot read back: the session options that resume from it (--mode continue
+/// in its map, from where the robot was), the odometry reading to prime the session with, and
+/// the fields the process added.
+struct SessionSnapshot {
+  SavedMapOptions options;
+  std::optional<OdometryReading> last_odometry;
+  nlohmann::json resume;
+};
+/// Reads the snapshot in `dir` (nullopt when there is none) for a session that was started with
+/// `options` (its --save-map stays). Throws MapFormatError for a damaged one.
+std::optional<SessionSnapshot> readSessionSnapshot(const std::string& dir, const SavedMapOptions& options);
 
 }  // namespace polarslam

@@ -50,7 +50,7 @@ void PsmSlam::startClock(int64_t utime) {
 }
 
 void PsmSlam::continueMap(const PoseGraph& graph, const std::vector<LaserScan>& references, const Pose2& start_pose,
-                          const Mat3& start_cov) {
+                          const Mat3& start_cov, const std::optional<PsmSlamFilterSeed>& seed) {
   if (clock_started_ || !keyframes_.empty()) throw std::logic_error("continueMap: call it before the first message");
   if (references.size() != graph.nodes().size())
     throw std::invalid_argument("the map has " + std::to_string(graph.nodes().size()) + " graph nodes but " +
@@ -68,7 +68,37 @@ void PsmSlam::continueMap(const PoseGraph& graph, const std::vector<LaserScan>& 
   filter_.reset(start_pose, start_cov);
   last_scan_pose_ = start_pose;
   started_ = true;
-  addMapSkeleton(start_pose);
+  if (seed) {
+    map_keyframes_ = 0;
+    addSeedKeyframes(*seed);
+  } else {
+    addMapSkeleton(start_pose);
+  }
+}
+
+void PsmSlam::addSeedKeyframes(const PsmSlamFilterSeed& seed) {
+  for (const auto& [id, cov] : seed.keyframes) {
+    if (id < 0 || id >= static_cast<int64_t>(keyframes_.size()) || keyframe(id).scan.size() == 0)
+      throw std::invalid_argument("the snapshot's filter keyframe " + std::to_string(id) + " is not a matchable map node");
+    filter_.addIndependentKeyframe(id, graph_.node(id).pose, cov);
+    filter_keyframes_.insert(id);
+    skeleton_.insert(id);
+  }
+  if (!filter_.hasKeyframe(seed.active))
+    throw std::invalid_argument("the snapshot's active keyframe " + std::to_string(seed.active) + " is not in its filter");
+  for (Keyframe& k : keyframes_)
+    if (!skeleton_.count(k.id)) k.scan = PreparedScan{};
+  filter_.setActiveKeyframe(seed.active);
+}
+
+PsmSlamFilterSeed PsmSlam::filterSeed() const {
+  PsmSlamFilterSeed seed;
+  seed.active = filter_.activeKeyframe();
+  for (const int64_t id : filter_keyframes_) {
+    const Mat3 J = composeJacobianB(filter_.keyframePose(id));
+    seed.keyframes.emplace_back(id, J * filter_.predictRelative(id).cov * J.transpose() + covarianceFloor(1e-4, 1e-5));
+  }
+  return seed;
 }
 
 void PsmSlam::addMapSkeleton(const Pose2& start_pose) {

@@ -42,6 +42,14 @@
 
 namespace polarslam {
 
+/// The filter of a run resumed from a snapshot: its keyframes, each with its covariance in the
+/// map frame as seen from the robot (so that the uncertainty of a loop back to it is kept), and
+/// the active one.
+struct PsmSlamFilterSeed {
+  int64_t active = -1;
+  std::vector<std::pair<int64_t, Mat3>> keyframes;
+};
+
 struct PsmSlamStats {
   size_t scans = 0;
   size_t unusable_scans = 0;       ///< malformed, or too few usable readings to match
@@ -93,8 +101,12 @@ class PsmSlam {
   /// join the filter as known poses, thinned as the skeleton is; matches with them are loop
   /// closures. Throws std::invalid_argument for a graph the scans do not cover or with no
   /// matchable scan.
+  /// With `seed` (a run resumed from its own snapshot) the filter holds the seed's keyframes
+  /// instead, and the map's keyframes are this run's own: loop closures follow the usual rules.
   void continueMap(const PoseGraph& graph, const std::vector<LaserScan>& references, const Pose2& start,
-                   const Mat3& start_cov);
+                   const Mat3& start_cov, const std::optional<PsmSlamFilterSeed>& seed = std::nullopt);
+  /// What a snapshot keeps of the filter (see PsmSlamFilterSeed).
+  PsmSlamFilterSeed filterSeed() const;
   /// Cumulative odometry. Bad readings are counted and ignored.
   void addOdometry(const OdometryReading& reading);
   /// One laser scan; never throws for bad content (malformed scans count as unusable).
@@ -153,6 +165,7 @@ class PsmSlam {
   /// The first message's time starts the filter's clock.
   void startClock(int64_t utime);
   void addMapSkeleton(const Pose2& start);
+  void addSeedKeyframes(const PsmSlamFilterSeed& seed);
   void predictTo(int64_t utime);
   std::optional<Observation> matchKeyframe(const Keyframe& keyframe, const PreparedScan& scan, const Pose2& mount,
                                            const RelativePosePrediction& prior, bool loop_candidate, bool wide_search);

@@ -24,9 +24,18 @@ std::vector<LogEvent> InputJournal::readOwnEvents() {
   LcmLogReader reader(path_);
   LogEvent event;
   std::string owner;  // a journal without a header was written by hand-started processes
+  generation_ = 0;
   if (reader.next(event)) {
-    if (event.channel == kHeaderChannel) owner.assign(event.data.begin(), event.data.end());
-    else events.push_back(event);
+    if (event.channel == kHeaderChannel) {
+      owner.assign(event.data.begin(), event.data.end());
+      // "LAUNCH_ID" or, once cut, "LAUNCH_ID\ngeneration N".
+      if (const size_t newline = owner.find("\ngeneration "); newline != std::string::npos) {
+        generation_ = std::strtoull(owner.c_str() + newline + 12, nullptr, 10);
+        owner.resize(newline);
+      }
+    } else {
+      events.push_back(event);
+    }
   }
   if (owner != launch_id_) {
     refused_ = "journal '" + path_ + "' belongs to launch '" + (owner.empty() ? "(started by hand)" : owner) +
@@ -40,18 +49,27 @@ std::vector<LogEvent> InputJournal::readOwnEvents() {
 }
 
 std::vector<LogEvent> InputJournal::recover() {
-  const std::vector<LogEvent> events = readOwnEvents();
+  std::vector<LogEvent> events = readEvents();
+  rewrite(generation_, events);
+  return events;
+}
+
+std::vector<LogEvent> InputJournal::readEvents() { return readOwnEvents(); }
+
+void InputJournal::rewrite(uint64_t generation, const std::vector<LogEvent>& events) {
   const std::string tmp = path_ + ".tmp";
   log_ = std::make_unique<lcm::LogFile>(tmp, "w");
   if (!log_->good()) throw std::runtime_error("cannot write journal '" + tmp + "'");
-  append(kHeaderChannel, 0, launch_id_.data(), launch_id_.size());
+  generation_ = generation;
+  const std::string header = generation == 0 ? launch_id_ : launch_id_ + "\ngeneration " + std::to_string(generation);
+  append(kHeaderChannel, 0, header.data(), header.size());
+  events_ = 0;
   for (const LogEvent& e : events) append(e.channel, e.utime, e.data.data(), e.data.size());
   std::fflush(log_->getFilePtr());
   std::error_code ec;
   std::filesystem::rename(tmp, path_, ec);  // the open file goes on under its final name
   if (ec) throw std::runtime_error("cannot rename journal '" + tmp + "': " + ec.message());
   last_flush_ = std::chrono::steady_clock::now();
-  return events;
 }
 
 void InputJournal::append(const std::string& channel, int64_t utime, const void* data, size_t size) {
@@ -63,6 +81,7 @@ void InputJournal::append(const std::string& channel, int64_t utime, const void*
   event.datalen = static_cast<int32_t>(size);
   event.data = const_cast<void*>(data);
   if (log_->writeEvent(&event) != 0) throw std::runtime_error("cannot append to journal '" + path_ + "'");
+  if (channel != kHeaderChannel) ++events_;
 }
 
 void InputJournal::flushIfDue() {

@@ -11,6 +11,10 @@
 // that wrote it, POLARSLAM_LAUNCH_ID as polarslam-launch sets it (empty for a process started by
 // hand). A journal of another launch (a reused --run-dir) is stale: it is refused, kept aside as
 // FILE.stale, and the process starts empty, saying so on stderr.
+//
+// A process that takes snapshots of its state (polarslam-psm-slam --snapshot-period) cuts its
+// journal after each one: the journal then holds only the messages since, and its header counts
+// the cuts (the generation), so that a restart can tell which snapshot the journal continues.
 #include <lcm/lcm-cpp.hpp>
 
 #include <chrono>
@@ -41,6 +45,15 @@ class InputJournal {
   /// with exactly those (temp file + rename, so a crash now loses nothing) and keeps it open for
   /// appending. Call once, before append().
   std::vector<LogEvent> recover();
+  /// recover() in two steps: the intact events (generation() tells whose cut they follow), then
+  /// the journal rewritten as `generation` holding `events` and kept open for appending.
+  std::vector<LogEvent> readEvents();
+  void rewrite(uint64_t generation, const std::vector<LogEvent>& events);
+  /// After a snapshot: the journal starts over, empty, as `generation`.
+  void cut(uint64_t generation) { rewrite(generation, {}); }
+  /// Cuts so far (0: never cut); events appended since the last cut.
+  uint64_t generation() const { return generation_; }
+  size_t events() const { return events_; }
   void append(const std::string& channel, int64_t utime, const void* data, size_t size);
   /// Flushes to the kernel when the flush period has passed since the last flush (always when it is 0).
   void flushIfDue();
@@ -52,6 +65,8 @@ class InputJournal {
   std::vector<LogEvent> readOwnEvents();
 
   std::string path_, launch_id_, refused_;
+  uint64_t generation_ = 0;
+  size_t events_ = 0;
   std::chrono::milliseconds flush_period_;
   std::unique_ptr<lcm::LogFile> log_;
   std::chrono::steady_clock::time_point last_flush_;

@@ -1,5 +1,6 @@
 #include "common/process_context.hpp"
 
+#include <algorithm>
 #include <unistd.h>
 
 #include <cerrno>
@@ -133,9 +134,25 @@ void ProcessContext::enableJournal(const JournalOptions& options) {
       options.path, std::chrono::milliseconds(static_cast<int64_t>(options.flush_period * 1000.0)));
 }
 
+void ProcessContext::resumeFromSnapshot(uint64_t generation, size_t covered) {
+  snapshot_generation_ = generation;
+  snapshot_covers_ = covered;
+}
+
 void ProcessContext::resumeFromJournal() {
-  const std::vector<LogEvent> events = journal_->recover();
+  std::vector<LogEvent> events = journal_->readEvents();
   if (!journal_->refused().empty()) std::cerr << "[" << name_ << "] warning: " << journal_->refused() << "\n";
+  uint64_t generation = journal_->generation();
+  if (snapshot_generation_ == generation + 1) {
+    // The snapshot was written but the journal not yet cut: skip what the snapshot holds.
+    events.erase(events.begin(), events.begin() + static_cast<long>(std::min(snapshot_covers_, events.size())));
+    generation = snapshot_generation_;
+  } else if (snapshot_generation_ != generation) {
+    std::cerr << "[" << name_ << "] warning: journal " << journal_->path() << " follows snapshot " << generation
+              << ", the state restored is snapshot " << snapshot_generation_ << ": replaying the journal as it is\n";
+    generation = std::max(generation, snapshot_generation_);
+  }
+  journal_->rewrite(generation, events);
   if (events.empty()) return;
   replaying_ = true;
   for (const LogEvent& event : events) {

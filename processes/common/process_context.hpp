@@ -113,6 +113,17 @@ class ProcessContext {
 
   /// Crash recovery (input_journal.hpp): run() first replays the journal, then appends to it.
   void enableJournal(const JournalOptions& options);
+  bool journaling() const { return journal_ != nullptr; }
+  /// With snapshots: the process has restored itself from the snapshot of `generation` (0: none),
+  /// which covers `covered` messages of the journal as it was before that snapshot cut it (a crash
+  /// between writing a snapshot and cutting the journal). Call before run().
+  void resumeFromSnapshot(uint64_t generation, size_t covered);
+  /// A snapshot of the state after every message so far is safely written: the journal starts over.
+  void cutJournal() { journal_->cut(journal_->generation() + 1); }
+  uint64_t journalGeneration() const { return journal_ ? journal_->generation() : 0; }
+  size_t journalEvents() const { return journal_ ? journal_->events() : 0; }
+  /// True while run() replays the journal.
+  bool replaying() const { return replaying_; }
 
   void handled() { ++handled_; }
   /// Counts a rejected message; the first of each kind is logged to stderr.
@@ -153,6 +164,8 @@ class ProcessContext {
   StreamTimeGate time_gate_;
   std::unique_ptr<InputJournal> journal_;
   bool replaying_ = false;
+  uint64_t snapshot_generation_ = 0;
+  size_t snapshot_covers_ = 0;
 };
 
 /// Resolves the LCM URL: explicit option, then LCM_DEFAULT_URL, then multicast with TTL 0.

@@ -10,6 +10,8 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <filesystem>
+#include <optional>
 #include <iostream>
 
 #include "common/program_info.hpp"
@@ -56,6 +58,29 @@ class GraphPublisher {
   bool dirty_ = false;
   int64_t seq_ = 0;
 };
+
+/// The crash-recovery snapshot to resume from, if `dir` holds one of this launch; a damaged or
+/// stale one is moved aside with a warning and the process starts from its journal alone.
+std::optional<SessionSnapshot> restorableSnapshot(const std::string& dir, const SavedMapOptions& options) {
+  auto setAside = [&](const std::string& why, const std::string& suffix) {
+    std::error_code ec;
+    std::filesystem::remove_all(dir + suffix, ec);
+    std::filesystem::rename(dir, dir + suffix, ec);
+    std::cerr << "polarslam-psm-slam: warning: snapshot " << dir << " " << why << "; kept as " << dir + suffix << "\n";
+  };
+  try {
+    std::optional<SessionSnapshot> snapshot = readSessionSnapshot(dir, options);
+    if (snapshot && snapshot->resume.value("launch", std::string()) != InputJournal::currentLaunchId()) {
+      setAside("belongs to another launch (a reused run folder?)", ".stale");
+      return std::nullopt;
+    }
+    if (snapshot) std::cerr << "polarslam-psm-slam: resuming from snapshot " << dir << "\n";
+    return snapshot;
+  } catch (const MapFormatError& e) {
+    setAside(std::string("is damaged (") + e.what() + ")", ".damaged");
+    return std::nullopt;
+  }
+}
 
 /// One line of what the run did, from its report figures.
 std::string exitSummary(const nlohmann::json& report) {
@@ -110,12 +135,24 @@ int main(int argc, char** argv) {
                  "searched among the reference scans");
   JournalOptions journal;
   addJournalOptions(app, journal);
+  double snapshot_period = 60.0;
+  app.add_option("--snapshot-period", snapshot_period,
+                 "with --journal: s of stream time between snapshots of the map and pose (JOURNAL.snapshot, a saved "
+                 "map); each cuts the journal, so a restart replays at most this much (0: never, the journal "
+                 "keeps the whole run)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
   addPrintConfigFlag(app, [&] { return effectiveConfigYaml("psm-slam", {"fused", config}); });
   CLI11_PARSE(app, argc, argv);
 
   try {
     if (!initial_pose.empty()) map_options.initial_pose = parseInitialPose(initial_pose);
-    PsmSlamSession session(loadPsmSlamEstimatorConfig(config), map_options);
+    const bool snapshots = !journal.path.empty() && snapshot_period > 0.0;
+    const std::string snapshot_dir = journal.path + ".snapshot";
+    const std::optional<SessionSnapshot> snapshot =
+        snapshots ? restorableSnapshot(snapshot_dir, map_options) : std::nullopt;
+    PsmSlamSession session(loadPsmSlamEstimatorConfig(config), snapshot ? snapshot->options : map_options);
+    if (snapshot && snapshot->last_odometry) session.onOdometry(*snapshot->last_odometry);
+    int64_t last_snapshot_utime = snapshot ? snapshot->resume.value("utime", int64_t{0}) : 0;
     auto save = [&](const char* why) {
       try {
         session.saveMapNow();
@@ -128,6 +165,24 @@ int main(int argc, char** argv) {
     };
     ProcessContext context("polarslam-psm-slam", process_options);
     context.enableJournal(journal);
+    if (snapshot)
+      context.resumeFromSnapshot(snapshot->resume.value("generation", uint64_t{0}),
+                                 snapshot->resume.value("journal_events", size_t{0}));
+    auto snapshotIfDue = [&](int64_t utime) {
+      if (!snapshots || !session.canSnapshot()) return;
+      if (last_snapshot_utime == 0) last_snapshot_utime = utime;
+      if (context.replaying() || utime - last_snapshot_utime < static_cast<int64_t>(snapshot_period * 1e6)) return;
+      try {
+        session.writeSnapshot(snapshot_dir, {{"generation", context.journalGeneration() + 1},
+                                             {"journal_events", context.journalEvents()},
+                                             {"launch", InputJournal::currentLaunchId()},
+                                             {"utime", utime}});
+        context.cutJournal();
+        last_snapshot_utime = utime;
+      } catch (const std::exception& e) {
+        context.reject(std::string("snapshot not written (the journal keeps growing): ") + e.what());
+      }
+    };
     GraphPublisher graph(context, channels.graph, graph_period);
     int64_t pose_seq = 0, anchor_seq = 0, last_utime = 0;
     auto publishGraph = [&](bool force) {
@@ -141,6 +196,7 @@ int main(int argc, char** argv) {
       if (r.graph_changed) graph.changed();
       last_utime = scan.utime;
       publishGraph(r.optimized);
+      snapshotIfDue(scan.utime);
       context.handled();
     });
     context.subscribeConverted<polarslam::odometry_t, OdometryReading>(channels.odometry, [&](OdometryReading& reading) {
