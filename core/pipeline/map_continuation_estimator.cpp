@@ -49,6 +49,9 @@ void MapContinuationEstimator::finish(const std::string& out_dir, nlohmann::json
     report["localization"] = localizationReportJson(*localizer_, 0.0);
     report["localization"]["mapping_started"] = false;
     report["localization"]["scans_before_mapping"] = scans_before_mapping_;
+    if (!save_map_.empty())
+      report["saved_map"] = {{"folder", save_map_}, {"written", false},
+                             {"reason", "the robot was never placed in the map: nothing was added to it"}};
     finished_ = true;
     return;
   }

@@ -34,7 +34,10 @@ class MapContinuationEstimator : public Estimator {
   /// Optimises the continued graph, writes its grid and the saved map (saveMapTo), and adds the
   /// "psm_slam" and "localization" (the search for the start) figures.
   void finish(const std::string& out_dir, nlohmann::json& report) override;
-  void saveMapTo(std::string dir) { mapping_.saveMapTo(std::move(dir)); }
+  void saveMapTo(std::string dir) {
+    save_map_ = dir;
+    mapping_.saveMapTo(std::move(dir));
+  }
 
   /// Whether the robot has been placed in the map and mapping goes on.
   bool mapping() const { return !localizer_; }
@@ -52,6 +55,7 @@ class MapContinuationEstimator : public Estimator {
   std::vector<PoseStamped> before_mapping_;  ///< final poses of the scans before the start was found
   std::vector<PoseStamped> online_, final_;
   bool finished_ = false;
+  std::string save_map_;
 };
 
 }  // namespace polarslam

@@ -270,6 +270,11 @@ void runPipeline(RunOptions o) {
   nlohmann::json report;
   checkLaserData(o, scans, usable_scans, report);
   estimator->finish(o.out, report);
+  if (report.contains("saved_map") && !report["saved_map"].value("written", true)) {
+    const std::string what = "--save-map " + o.save_map + " not written: " + report["saved_map"].value("reason", "");
+    std::cerr << "warning: run " << o.pipeline << ": " << what << "\n";
+    report["warnings"].push_back(what);
+  }
   const double run_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   const auto& estimate = estimator->trajectory();
