@@ -1,5 +1,9 @@
 #include "pipeline/live_grid.hpp"
 
+#include <stdexcept>
+
+#include "map/map_store.hpp"
+
 namespace polarslam {
 namespace {
 
@@ -22,7 +26,13 @@ BuiltGrid buildFromGraph(const GraphScanStore& store, const PoseGraph& graph, co
 }  // namespace
 
 LiveGrid::LiveGrid(LiveGridOptions options)
-    : options_(std::move(options)), anchored_(options_.store), graph_scans_(options_.psm_map.all_scans) {}
+    : options_(std::move(options)), anchored_(options_.store), graph_scans_(options_.psm_map.all_scans) {
+  if (options_.load_map.empty()) return;
+  if (options_.source != GridSource::PsmGraph) throw std::invalid_argument("a saved map goes with the PSM SLAM graph");
+  const StoredMap map = loadMap(options_.load_map);
+  for (const MapReferenceScan& s : map.scans) graph_scans_.addStored(s.scan, s.anchor);
+  setPoseGraph(map.graph);
+}
 
 void LiveGrid::addScan(LaserScan scan) {
   if (options_.source == GridSource::EkfAnchors) anchored_.addScan(std::move(scan));

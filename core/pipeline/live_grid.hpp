@@ -38,6 +38,9 @@ struct LiveGridOptions {
   GridOutputOptions ekf;      ///< grid and regeneration options (EkfAnchors)
   ScanStoreOptions store;     ///< scan store bounds (EkfAnchors)
   PsmSlamMapOptions psm_map;  ///< grid options and which scans (PsmGraph), as in config/psm-slam.yaml
+  /// PsmGraph: a saved map PSM SLAM continues (--load-map M --mode continue): its reference scans
+  /// are in the grid from the start, placed by its graph until PSM_SLAM_GRAPH brings the live one.
+  std::string load_map;
 };
 
 /// Counts for status messages.

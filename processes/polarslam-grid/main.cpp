@@ -345,6 +345,9 @@ int main(int argc, char** argv) {
   ProcessOptions process_options;
   addProcessOptions(app, process_options);
   addChannelOptions(app, o.channels);
+  app.add_option("--load-map", o.grid.load_map,
+                 "psm-slam: the saved map polarslam-psm-slam continues (--mode continue): its scans are in the grid")
+      ->check(CLI::ExistingDirectory);
   JournalOptions journal;
   addJournalOptions(app, journal);
   CLI11_PARSE(app, argc, argv);

@@ -9,11 +9,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <thread>
 
 #include "child_process.hpp"
+#include "map_files.hpp"
 #include "common/lcm_log.hpp"
+#include "polarslam/grid_status_t.hpp"
 #include "polarslam/map_request_t.hpp"
 
 using namespace std::chrono_literals;
@@ -24,6 +27,9 @@ using polarslam::testing::readFile;
 using polarslam::testing::readJson;
 using polarslam::testing::runToEnd;
 using polarslam::testing::sourcePath;
+using polarslam::testing::MapServerMap;
+using polarslam::testing::occupiedAgreement;
+using polarslam::testing::readMapServer;
 
 namespace {
 namespace fs = std::filesystem;
@@ -47,11 +53,20 @@ void requestSave() {
 }
 
 /// Plays the log into a live polarslam-psm-slam with `options`, records everything, stops the
-/// process (its final graph and saved map), and scores the recorded PSM_SLAM_POSE.
+/// process (its final graph and saved map), and scores the recorded PSM_SLAM_POSE. With
+/// `grid_options`, a polarslam-grid --source psm-slam runs beside it and writes its map into
+/// live-NAME-grid on exit.
 nlohmann::json runLive(const fs::path& dir, const std::string& name, const std::vector<std::string>& options,
-                       bool save_request = false) {
+                       bool save_request = false, const std::optional<std::vector<std::string>>& grid_options = {}) {
   const std::string recorded = (dir / ("live-" + name + ".lcmlog")).string();
   ChildProcess logger({"lcm-logger", "--quiet", "--force", recorded}, (dir / ("logger-" + name + ".out")).string());
+  std::unique_ptr<ChildProcess> grid;
+  if (grid_options) {
+    std::vector<std::string> argv{binPath("polarslam-grid"), "--source", "psm-slam", "--config", kConfig,
+                                  "--out", (dir / ("live-" + name + "-grid")).string(), "--write-period", "0"};
+    argv.insert(argv.end(), grid_options->begin(), grid_options->end());
+    grid = std::make_unique<ChildProcess>(argv, (dir / ("grid-" + name + ".out")).string());
+  }
   std::vector<std::string> argv{binPath("polarslam-psm-slam"), "--config", kConfig};
   argv.insert(argv.end(), options.begin(), options.end());
   ChildProcess slam(argv, (dir / ("slam-" + name + ".out")).string());
@@ -66,6 +81,12 @@ nlohmann::json runLive(const fs::path& dir, const std::string& name, const std::
   slam.signal(SIGINT);
   EXPECT_TRUE(slam.waitFor(60s));
   EXPECT_EQ(slam.exitCode(), 0) << readFile(dir / ("slam-" + name + ".out"));
+  if (grid) {
+    std::this_thread::sleep_for(500ms);  // the final graph
+    grid->signal(SIGINT);
+    EXPECT_TRUE(grid->waitFor(60s));
+    EXPECT_EQ(grid->exitCode(), 0) << readFile(dir / ("grid-" + name + ".out"));
+  }
   logger.signal(SIGINT);
   EXPECT_TRUE(logger.waitFor(10s));
   const fs::path scored = dir / ("live-" + name);
@@ -79,6 +100,26 @@ nlohmann::json runLive(const fs::path& dir, const std::string& name, const std::
 
 double figure(const nlohmann::json& report, const char* key) {
   return report.contains(key) ? report[key].get<double>() : std::nan("");
+}
+
+/// scans_stored of the last GRID_STATUS in a recorded log (-1: none).
+int lastScansStored(const std::string& path) {
+  polarslam::LcmLogReader reader(path);
+  polarslam::LogEvent event;
+  polarslam::grid_status_t status;
+  int stored = -1;
+  while (reader.next(event))
+    if (event.channel == "GRID_STATUS" && event.decode(status)) stored = status.scans_stored;
+  return stored;
+}
+
+/// Messages in an LCM log file (header included).
+long eventsIn(const std::string& path) {
+  polarslam::LcmLogReader reader(path);
+  polarslam::LogEvent event;
+  long n = 0;
+  while (reader.next(event)) ++n;
+  return n;
 }
 
 TEST(LiveMap, SavesLocalisesAndContinuesLiveAsOffline) {
@@ -102,7 +143,7 @@ TEST(LiveMap, SavesLocalisesAndContinuesLiveAsOffline) {
   const nlohmann::json offline_localize = runOffline(dir, "localize", localize);
   const nlohmann::json live_localize = runLive(dir, "localize", localize);
   const nlohmann::json offline_continue = runOffline(dir, "continue", extend);
-  const nlohmann::json live_continue = runLive(dir, "continue", extend);
+  const nlohmann::json live_continue = runLive(dir, "continue", extend, false, std::vector<std::string>{"--load-map", live_map});
 
   std::printf("PSM SLAM, ATE RMSE [m]   offline final  live final  offline online  live online\n");
   for (const auto& [name, offline, live] :
@@ -118,17 +159,17 @@ TEST(LiveMap, SavesLocalisesAndContinuesLiveAsOffline) {
   EXPECT_NEAR(figure(live_continue, "ate_rmse_m"), figure(offline_continue, "ate_rmse_m"),
               0.10 * figure(offline_continue, "ate_rmse_m"));
   EXPECT_LT(figure(live_continue, "ate_rmse_m"), 0.10) << "in the map's frame";
+  // The live grid of a continued map holds the stored scans and the new ones, as offline.
+  const MapServerMap offline_grid = readMapServer(dir / "offline-continue");
+  const MapServerMap live_grid = readMapServer(dir / "live-continue-grid");
+  ASSERT_GT(offline_grid.occupied.size(), 100u);
+  EXPECT_GE(occupiedAgreement(offline_grid, live_grid), 0.95);
+  EXPECT_GE(occupiedAgreement(live_grid, offline_grid), 0.95);
+  EXPECT_EQ(lastScansStored((dir / "live-continue.lcmlog").string()), offline_continue["grid"]["scans"].get<int>())
+      << "the live grid keeps the map's reference scans and the new ones";
   if (!::testing::Test::HasFailure()) fs::remove_all(dir);
 }
 
-/// Messages in an LCM log file (header included).
-long eventsIn(const std::string& path) {
-  polarslam::LcmLogReader reader(path);
-  polarslam::LogEvent event;
-  long n = 0;
-  while (reader.next(event)) ++n;
-  return n;
-}
 
 // Snapshots (issue 15, item 4): with --journal and --snapshot-period the process saves its map
 // and pose every 10 s of stream time and cuts its journal. Killed with SIGKILL mid-run, the journal
