@@ -9,9 +9,9 @@
 namespace polarslam {
 
 MapLocalizationEstimator::MapLocalizationEstimator(StoredMap map, PsmSlamEstimatorConfig config,
-                                                   std::optional<Pose2> initial_pose)
+                                                   std::optional<Pose2> initial_pose, const Mat3& initial_cov)
     : map_(std::move(map)), config_(std::move(config)), localizer_(mapReferences(map_), config_.slam) {
-  if (initial_pose) localizer_.setInitialPose(*initial_pose, Mat3::Zero());
+  if (initial_pose) localizer_.setInitialPose(*initial_pose, initial_cov);
 }
 
 void MapLocalizationEstimator::onOdometry(const OdometryReading& odometry) {

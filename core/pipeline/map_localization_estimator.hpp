@@ -21,7 +21,8 @@ nlohmann::json localizationReportJson(const MapLocalizer& localizer, double seco
 class MapLocalizationEstimator : public Estimator {
  public:
   /// `initial_pose`: a known start in the map frame; without it the start is searched globally.
-  MapLocalizationEstimator(StoredMap map, PsmSlamEstimatorConfig config, std::optional<Pose2> initial_pose);
+  MapLocalizationEstimator(StoredMap map, PsmSlamEstimatorConfig config, std::optional<Pose2> initial_pose,
+                           const Mat3& initial_cov = Mat3::Zero());
 
   std::string name() const override { return "psm-localize"; }
   void onOdometry(const OdometryReading& odometry) override;
@@ -32,6 +33,7 @@ class MapLocalizationEstimator : public Estimator {
   void finish(const std::string& out_dir, nlohmann::json& report) override;
 
   const MapLocalizer& localizer() const { return localizer_; }
+  const StoredMap& map() const { return map_; }
   /// What the latest scan gave.
   const MapLocalizationResult& lastResult() const { return last_result_; }
   double seconds() const { return seconds_; }

@@ -35,7 +35,8 @@ std::unique_ptr<Estimator> makePsmSlamEstimator(PsmSlamEstimatorConfig config, c
   }
   if (o.mode != "localize") throw std::runtime_error("--mode must be localize or continue, not '" + o.mode + "'");
   if (!o.save_map.empty()) throw std::runtime_error("--mode localize adds nothing to the map: no --save-map");
-  return std::make_unique<MapLocalizationEstimator>(loadMap(o.load_map), std::move(config), o.initial_pose);
+  return std::make_unique<MapLocalizationEstimator>(loadMap(o.load_map), std::move(config), o.initial_pose,
+                                                    o.initial_cov);
 }
 
 PsmSlamSession::PsmSlamSession(PsmSlamEstimatorConfig config, const SavedMapOptions& options)
@@ -100,6 +101,11 @@ namespace {
 nlohmann::json poseJson(const Pose2& p) { return {p.x, p.y, p.theta}; }
 Pose2 poseFromJson(const nlohmann::json& j) { return Pose2(j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()); }
 
+nlohmann::json odometryJson(const OdometryReading& o) {
+  return {{"utime", o.utime}, {"seq", o.seq}, {"pose", poseJson(o.pose)}, {"left_travel", o.left_travel},
+          {"right_travel", o.right_travel}, {"v", o.v}, {"omega", o.omega}};
+}
+
 Mat3 covarianceFromJson(const nlohmann::json& j, const std::string& file) {
   const std::vector<double> values = j.get<std::vector<double>>();
   if (values.size() != 9) throw MapFormatError(file, "'" + file + "': a covariance has 9 numbers");
@@ -109,8 +115,23 @@ Mat3 covarianceFromJson(const nlohmann::json& j, const std::string& file) {
 }  // namespace
 
 void PsmSlamSession::writeSnapshot(const std::string& dir, nlohmann::json resume) const {
+  if (last_odometry_) resume["last_odometry"] = odometryJson(*last_odometry_);
+  if (localization_) {
+    // Localising: the map is unchanged; the pose resumes tracking, or the search goes on.
+    const MapLocalizer& localizer = localization_->localizer();
+    resume["mode"] = "localize";
+    if (localizer.localized()) {
+      const PoseStamped& pose = localization_->lastResult().pose;
+      resume["pose"] = poseJson(pose.pose);
+      resume["covariance"] = std::vector<double>(pose.cov.data(), pose.cov.data() + 9);
+    }
+    StoredMap map = localization_->map();
+    map.resume_json = resume.dump(1) + "\n";
+    return saveMap(dir, map, nullptr);
+  }
   const PsmSlamEstimator* m = mapping();
   if (!m) throw MapFormatError(dir, "no map yet: nothing to snapshot");
+  resume["mode"] = "continue";
   const PsmSlam& slam = m->slam();
   // The map's poses are taken as known when resuming: the robot's uncertainty relative to its
   // reference scan is what it keeps.
@@ -125,12 +146,6 @@ void PsmSlamSession::writeSnapshot(const std::string& dir, nlohmann::json resume
     keyframes.push_back({{"id", id}, {"covariance", std::vector<double>(keyframe_cov.data(), keyframe_cov.data() + 9)}});
   resume["filter"] = {{"active", seed.active}, {"keyframes", keyframes}};
   resume["covariance"] = std::vector<double>(cov.data(), cov.data() + 9);
-  if (last_odometry_) {
-    const OdometryReading& o = *last_odometry_;
-    resume["last_odometry"] = {{"utime", o.utime},       {"seq", o.seq},          {"pose", poseJson(o.pose)},
-                               {"left_travel", o.left_travel}, {"right_travel", o.right_travel},
-                               {"v", o.v},               {"omega", o.omega}};
-  }
   StoredMap map = m->storedMap();
   map.resume_json = resume.dump(1) + "\n";
   saveMap(dir, map, nullptr);
@@ -145,15 +160,21 @@ std::optional<SessionSnapshot> readSessionSnapshot(const std::string& dir, const
   try {
     snapshot.resume = nlohmann::json::parse(map.resume_json);
     snapshot.options.load_map = dir;
-    snapshot.options.mode = "continue";
-    snapshot.options.save_map = options.save_map;
-    snapshot.options.initial_pose = poseFromJson(snapshot.resume.at("pose"));
-    snapshot.options.initial_cov = covarianceFromJson(snapshot.resume.at("covariance"), file);
-    PsmSlamFilterSeed seed;
-    seed.active = snapshot.resume.at("filter").at("active").get<int64_t>();
-    for (const nlohmann::json& k : snapshot.resume.at("filter").at("keyframes"))
-      seed.keyframes.emplace_back(k.at("id").get<int64_t>(), covarianceFromJson(k.at("covariance"), file));
-    snapshot.options.filter_seed = seed;
+    snapshot.options.mode = snapshot.resume.at("mode").get<std::string>();
+    if (snapshot.options.mode != "localize" && snapshot.options.mode != "continue")
+      throw MapFormatError(file, "'" + file + "': mode must be localize or continue");
+    if (snapshot.resume.contains("pose")) {
+      snapshot.options.initial_pose = poseFromJson(snapshot.resume.at("pose"));
+      snapshot.options.initial_cov = covarianceFromJson(snapshot.resume.at("covariance"), file);
+    }
+    if (snapshot.options.mode == "continue") {
+      snapshot.options.save_map = options.save_map;
+      PsmSlamFilterSeed seed;
+      seed.active = snapshot.resume.at("filter").at("active").get<int64_t>();
+      for (const nlohmann::json& k : snapshot.resume.at("filter").at("keyframes"))
+        seed.keyframes.emplace_back(k.at("id").get<int64_t>(), covarianceFromJson(k.at("covariance"), file));
+      snapshot.options.filter_seed = seed;
+    }
     if (snapshot.resume.contains("last_odometry")) {
       const nlohmann::json& o = snapshot.resume["last_odometry"];
       OdometryReading r;

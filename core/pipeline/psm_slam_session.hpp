@@ -59,10 +59,12 @@ class PsmSlamSession {
   /// At the end: the final optimisation and, with --save-map, the map saved. The report figures.
   nlohmann::json finish();
 
-  /// Crash recovery: whether there is map state to snapshot (mapping, not localising).
-  bool canSnapshot() const { return mapping() != nullptr; }
-  /// Writes the map so far and where the robot is (resume.json with `resume`'s fields added) to
-  /// `dir`, atomically, as a saved map without its grid. Throws MapFormatError.
+  /// Crash recovery: whether there is state to snapshot (mapping, or localising; not while a
+  /// continued map's start is still searched).
+  bool canSnapshot() const { return mapping() != nullptr || localization_ != nullptr; }
+  /// Writes the map so far (localising: the map worked in) and where the robot is (resume.json
+  /// with `resume`'s fields added) to `dir`, atomically, as a saved map without its grid. Throws
+  /// MapFormatError.
   void writeSnapshot(const std::string& dir, nlohmann::json resume) const;
 
  private:
