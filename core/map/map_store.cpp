@@ -4,6 +4,8 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -26,6 +28,34 @@ const char* const kGraphFile = "graph.txt";
 const char* const kScansFile = "scans.txt";
 const char* const kParametersFile = "parameters.yaml";
 const char* const kResumeFile = "resume.json";
+const char* const kUncertaintyFile = "uncertainty.json";
+
+std::string uncertaintyJson(const std::vector<std::pair<int64_t, Mat3>>& covariances) {
+  nlohmann::json nodes = nlohmann::json::array();
+  for (const auto& [id, cov] : covariances) nodes.push_back({{"id", id}, {"covariance", std::vector<double>(cov.data(), cov.data() + 9)}});
+  return nlohmann::json{{"node_covariances", nodes}}.dump(1) + "\n";
+}
+
+std::vector<std::pair<int64_t, Mat3>> parseUncertainty(const std::string& text, const std::string& file,
+                                                       const PoseGraph& graph) {
+  std::vector<std::pair<int64_t, Mat3>> out;
+  try {
+    const nlohmann::json parsed = nlohmann::json::parse(text);  // kept alive through the loop
+    for (const nlohmann::json& node : parsed.at("node_covariances")) {
+      const int64_t id = node.at("id").get<int64_t>();
+      const std::vector<double> values = node.at("covariance").get<std::vector<double>>();
+      if (values.size() != 9) throw MapFormatError(file, "'" + file + "': a covariance has 9 numbers");
+      const Mat3 cov = Eigen::Map<const Mat3>(values.data());
+      if (graph.indexOf(id) < 0) throw MapFormatError(file, "'" + file + "': node " + std::to_string(id) + " is not in the graph");
+      if (!cov.allFinite() || Eigen::SelfAdjointEigenSolver<Mat3>(0.5 * (cov + cov.transpose())).eigenvalues().minCoeff() <= 0.0)
+        throw MapFormatError(file, "'" + file + "': node " + std::to_string(id) + " has no positive definite covariance");
+      out.emplace_back(id, cov);
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw MapFormatError(file, "'" + file + "': " + e.what());
+  }
+  return out;
+}
 
 // ---- numbers that read back bit for bit ------------------------------------------------------
 
@@ -314,6 +344,7 @@ void writeMapFolder(const std::string& folder, const StoredMap& map, const Occup
   add(kScansFile, scansText(map.scans));
   add(kParametersFile, map.parameters_yaml);
   if (!map.resume_json.empty()) add(kResumeFile, map.resume_json);
+  if (!map.node_covariances.empty()) add(kUncertaintyFile, uncertaintyJson(map.node_covariances));
   if (grid) {
     const GridFiles written = writeGridFiles(folder, *grid);
     for (const std::string& path : {written.ot, written.bt, written.pgm, written.yaml, written.png}) {
@@ -476,6 +507,9 @@ StoredMap loadMap(const std::string& dir, const std::optional<LaserGeometry>& ex
   }
   map.parameters_yaml = readCheckedFile(dir, files, kParametersFile);
   if (files.contains(kResumeFile)) map.resume_json = readCheckedFile(dir, files, kResumeFile);
+  if (files.contains(kUncertaintyFile))
+    map.node_covariances =
+        parseUncertainty(readCheckedFile(dir, files, kUncertaintyFile), dir + "/" + kUncertaintyFile, map.graph);
   for (const MapReferenceScan& reference : map.scans) {
     const std::string mismatch = laserGeometryMismatch(map.laser, laserGeometryOf(reference.scan));
     if (!mismatch.empty())

@@ -6,6 +6,7 @@
 //   M/graph.txt       the pose graph: nodes, edges with covariance, kind and outlier flag
 //   M/scans.txt       the reference scans (ranges and beam geometry) with their graph anchors
 //   M/parameters.yaml the effective psm-slam configuration the map was built with
+//   M/uncertainty.json each node's marginal covariance when the map was saved, where known
 //   M/resume.json     only in a crash-recovery snapshot: where the process was (docs/maps.md)
 //   M/map.*           the occupancy grid (core/grid writers), when one is given
 //
@@ -57,6 +58,9 @@ struct StoredMap {
   std::string parameters_yaml;  ///< the effective configuration (ParameterTable::yaml())
   /// A crash-recovery snapshot's process state (resume.json; empty in a map saved for users).
   std::string resume_json;
+  /// The filter's marginal covariance of each node's pose in the map frame, where known
+  /// (uncertainty.json): how far the map itself may be off, for continuing it.
+  std::vector<std::pair<int64_t, Mat3>> node_covariances;
 };
 
 /// A map that cannot be saved or loaded; what() names the file at fault.

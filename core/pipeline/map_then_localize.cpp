@@ -27,16 +27,20 @@ MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, in
 
   const auto start = std::chrono::steady_clock::now();
   std::optional<Pose2> known_start;
-  if (options.known_start && !result.mapped.empty()) known_start = result.mapped.back().pose;
+  Mat3 start_cov = Mat3::Zero();  // the mapping's own uncertainty where it ended
+  if (options.known_start && !result.mapped.empty()) {
+    known_start = result.mapped.back().pose;
+    start_cov = mapping.onlineTrajectory().back().cov;
+  }
   std::unique_ptr<Estimator> second;
   const MapLocalizationEstimator* localization = nullptr;
   const MapContinuationEstimator* continuation = nullptr;
   if (options.continue_mapping) {
-    auto estimator = std::make_unique<MapContinuationEstimator>(std::move(map), config, known_start);
+    auto estimator = std::make_unique<MapContinuationEstimator>(std::move(map), config, known_start, start_cov);
     continuation = estimator.get();
     second = std::move(estimator);
   } else {
-    auto estimator = std::make_unique<MapLocalizationEstimator>(std::move(map), config, known_start);
+    auto estimator = std::make_unique<MapLocalizationEstimator>(std::move(map), config, known_start, start_cov);
     localization = estimator.get();
     second = std::move(estimator);
   }

@@ -84,7 +84,7 @@ void PsmSlamEstimator::continueMap(const StoredMap& map, const Pose2& start, con
     throw std::invalid_argument("the map has no reference scan for graph node " +
                                 std::to_string(map.graph.nodes()[static_cast<size_t>(missing - found.begin())].id) +
                                 ": it cannot be continued");
-  slam_.continueMap(map.graph, references, start, start_cov, seed);
+  slam_.continueMap(map.graph, references, start, start_cov, seed, map.node_covariances);
   for (const MapReferenceScan& s : map.scans) map_scans_.addStored(s.scan, s.anchor);
 }
 
@@ -169,7 +169,9 @@ StoredMap PsmSlamEstimator::storedMap() const {
   PsmSlamEstimatorConfig config = config_;
   ParameterTable table;
   describePsmSlamEstimatorConfig(table, config);
-  return storedMapOf(slam_.graph(), map_scans_.scans(), map_scans_.anchors(), table.yaml());
+  StoredMap map = storedMapOf(slam_.graph(), map_scans_.scans(), map_scans_.anchors(), table.yaml());
+  map.node_covariances = slam_.nodeCovariances();
+  return map;
 }
 
 void PsmSlamEstimator::saveMapNow() const {

@@ -50,7 +50,8 @@ void PsmSlam::startClock(int64_t utime) {
 }
 
 void PsmSlam::continueMap(const PoseGraph& graph, const std::vector<LaserScan>& references, const Pose2& start_pose,
-                          const Mat3& start_cov, const std::optional<PsmSlamFilterSeed>& seed) {
+                          const Mat3& start_cov, const std::optional<PsmSlamFilterSeed>& seed,
+                          const std::vector<std::pair<int64_t, Mat3>>& node_covariances) {
   if (clock_started_ || !keyframes_.empty()) throw std::logic_error("continueMap: call it before the first message");
   if (references.size() != graph.nodes().size())
     throw std::invalid_argument("the map has " + std::to_string(graph.nodes().size()) + " graph nodes but " +
@@ -63,6 +64,7 @@ void PsmSlam::continueMap(const PoseGraph& graph, const std::vector<LaserScan>& 
     keyframes_.push_back({id, references[i].utime, references[i].laser_pose, prepared ? std::move(*prepared) : PreparedScan{}});
   }
   graph_ = graph;
+  for (const auto& [id, cov] : node_covariances) left_filter_cov_[id] = cov;
   map_keyframes_ = static_cast<int64_t>(keyframes_.size());
   keyframes_at_last_optimization_ = map_keyframes_;
   filter_.reset(start_pose, start_cov);
@@ -91,6 +93,19 @@ void PsmSlam::addSeedKeyframes(const PsmSlamFilterSeed& seed) {
   filter_.setActiveKeyframe(seed.active);
 }
 
+std::vector<std::pair<int64_t, Mat3>> PsmSlam::nodeCovariances() const {
+  // The first node defines the frame (zero covariance): a floor keeps every one positive definite.
+  const Mat3 floor = covarianceFloor(1e-4, 1e-5);
+  std::vector<std::pair<int64_t, Mat3>> out;
+  for (const PoseGraphNode& node : graph_.nodes()) {
+    std::optional<Mat3> cov;
+    if (filter_.hasKeyframe(node.id)) cov = filter_.keyframeCovariance(node.id);
+    else if (const auto it = left_filter_cov_.find(node.id); it != left_filter_cov_.end()) cov = it->second;
+    if (cov) out.emplace_back(node.id, 0.5 * (*cov + cov->transpose()) + floor);
+  }
+  return out;
+}
+
 PsmSlamFilterSeed PsmSlam::filterSeed() const {
   PsmSlamFilterSeed seed;
   seed.active = filter_.activeKeyframe();
@@ -102,7 +117,8 @@ PsmSlamFilterSeed PsmSlam::filterSeed() const {
 }
 
 void PsmSlam::addMapSkeleton(const Pose2& start_pose) {
-  // The map's poses are the frame this run continues in: known to about a millimetre.
+  // The map's poses are the frame this run continues in: known to about a millimetre, unless the
+  // map says how uncertain they were.
   const Mat3 known = covarianceFloor(1e-3, 1e-4);
   std::optional<int64_t> nearest;
   double nearest_distance = 0.0;
@@ -115,7 +131,8 @@ void PsmSlam::addMapSkeleton(const Pose2& start_pose) {
              std::abs(wrapAngle(other.theta - pose.theta)) < params_.skeleton_heading;
     });
     if (covered) continue;
-    filter_.addIndependentKeyframe(k.id, pose, known);
+    const auto saved = left_filter_cov_.find(k.id);
+    filter_.addIndependentKeyframe(k.id, pose, saved == left_filter_cov_.end() ? known : saved->second + known);
     filter_keyframes_.insert(k.id);
     skeleton_.insert(k.id);
     const double distance = (pose.translation() - start_pose.translation()).norm();
@@ -485,6 +502,7 @@ void PsmSlam::addKeyframe(const LaserScan& scan, PreparedScan prepared, const st
 
 void PsmSlam::marginaliseKeyframe(int64_t id) {
   graph_.setPose(id, filter_.keyframePose(id));
+  left_filter_cov_[id] = filter_.keyframeCovariance(id);
   filter_.removeKeyframe(id);
   filter_keyframes_.erase(id);
   skeleton_.erase(id);

@@ -26,6 +26,7 @@
 // filter. Every scan's pose is stored relative to its reference scan, so the whole trajectory
 // follows the optimised graph.
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -103,8 +104,14 @@ class PsmSlam {
   /// matchable scan.
   /// With `seed` (a run resumed from its own snapshot) the filter holds the seed's keyframes
   /// instead, and the map's keyframes are this run's own: loop closures follow the usual rules.
+  /// `node_covariances`: the map's own uncertainty where its saver knew it (nodeCovariances());
+  /// the map's keyframes join the filter with it instead of as known poses.
   void continueMap(const PoseGraph& graph, const std::vector<LaserScan>& references, const Pose2& start,
-                   const Mat3& start_cov, const std::optional<PsmSlamFilterSeed>& seed = std::nullopt);
+                   const Mat3& start_cov, const std::optional<PsmSlamFilterSeed>& seed = std::nullopt,
+                   const std::vector<std::pair<int64_t, Mat3>>& node_covariances = {});
+  /// Each graph node's marginal covariance in the map frame: the filter's now, or when it left
+  /// the filter (nodes of a continued map: as loaded, where known).
+  std::vector<std::pair<int64_t, Mat3>> nodeCovariances() const;
   /// What a snapshot keeps of the filter (see PsmSlamFilterSeed).
   PsmSlamFilterSeed filterSeed() const;
   /// Cumulative odometry. Bad readings are counted and ignored.
@@ -210,6 +217,7 @@ class PsmSlam {
   std::set<int64_t> filter_keyframes_;     ///< ids still in the filter
   std::vector<LoopHypothesis> hypotheses_;
   std::set<int64_t> skeleton_;             ///< older keyframes kept in the filter for loop closure
+  std::map<int64_t, Mat3> left_filter_cov_;  ///< marginal covariance of keyframes no longer in the filter
   std::vector<TrajectoryRecord> records_;
   PsmSlamStats stats_;
 

@@ -274,5 +274,24 @@ TEST_F(MapStore, RefusesAWellChecksummedButMalformedRecordNamingTheLine) {
   EXPECT_NE(error.find("graph.txt:"), std::string::npos) << error;
 }
 
+TEST_F(MapStore, TheNodesUncertaintyAndASnapshotsStateRoundTripAndABadCovarianceIsRefused) {
+  StoredMap map = testMap();
+  map.node_covariances = {{map.graph.nodes().front().id, Vec3(1e-4, 2e-4, 1e-5).asDiagonal()},
+                          {map.graph.nodes().back().id, Vec3(0.25, 0.09, 1e-3).asDiagonal()}};
+  map.resume_json = "{\"mode\": \"continue\"}\n";
+  saveMap(dir_, map);
+  const StoredMap loaded = loadMap(dir_);
+  ASSERT_EQ(loaded.node_covariances.size(), 2u);
+  EXPECT_EQ(loaded.node_covariances[1].first, map.graph.nodes().back().id);
+  EXPECT_EQ(loaded.node_covariances[1].second, map.node_covariances[1].second);
+  EXPECT_EQ(loaded.resume_json, map.resume_json);
+
+  map.node_covariances[1].second(0, 0) = -1.0;
+  saveMap(dir_, map);
+  const std::string error = loadError();
+  EXPECT_NE(error.find("uncertainty.json"), std::string::npos) << error;
+  EXPECT_NE(error.find("positive definite"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace polarslam
