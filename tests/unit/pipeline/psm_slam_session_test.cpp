@@ -1,0 +1,118 @@
+// PsmSlamSession, what polarslam-psm-slam runs: its snapshots (issue 15, item 4) read back into a
+// session that goes on where the first one stopped, in-process (the live kill-and-restart test is
+// LiveMap.Snapshots*), and the option combinations it refuses.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "map/map_store.hpp"
+#include "pipeline/psm_slam_session.hpp"
+#include "unit/slam/synthetic_run.hpp"
+
+namespace polarslam {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::SyntheticRun;
+using testing::SyntheticRunOptions;
+
+PsmSlamEstimatorConfig syntheticConfig() {
+  PsmSlamEstimatorConfig c;
+  c.slam.odometry.poses.k_distance = 4e-4;  // the simulated odometry's noise (synthetic_run.hpp)
+  c.slam.odometry.poses.k_heading_per_rad = 1e-4;
+  c.slam.odometry.poses.k_heading_per_m = 2e-4;
+  return c;
+}
+
+fs::path freshFolder(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("polarslam-session-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+double worstError(const std::vector<PoseStamped>& poses, const SyntheticRun& run, size_t first) {
+  double worst = 0.0;
+  for (size_t k = first; k < poses.size(); ++k)
+    worst = std::max(worst, (poses[k].pose.translation() - run.truth[k].translation()).norm());
+  return worst;
+}
+
+TEST(PsmSlamSession, ARunResumedFromItsSnapshotGoesOnInTheSameFrame) {
+  SyntheticRunOptions options;
+  options.laps = 2;
+  const SyntheticRun run = testing::simulateLoopRun(testing::makeLoopWorld(), options);
+  const size_t cut = run.scans.size() / 2;
+  const fs::path dir = freshFolder("resume");
+  const std::string snapshot_dir = (dir / "psm.journal.snapshot").string();
+
+  PsmSlamSession first(syntheticConfig(), {});
+  std::vector<PoseStamped> poses;
+  for (size_t k = 0; k < cut; ++k) {
+    first.onOdometry(run.odometry[k]);
+    poses.push_back(first.onLaser(run.scans[k]).pose);
+  }
+  ASSERT_TRUE(first.canSnapshot());
+  first.writeSnapshot(snapshot_dir, {{"generation", 3}, {"journal_events", 17}});
+
+  const std::optional<SessionSnapshot> snapshot = readSessionSnapshot(snapshot_dir, {});
+  ASSERT_TRUE(snapshot);
+  EXPECT_EQ(snapshot->resume["generation"], 3);
+  EXPECT_EQ(snapshot->resume["journal_events"], 17);
+  EXPECT_EQ(snapshot->options.mode, "continue");
+  ASSERT_TRUE(snapshot->options.initial_pose && snapshot->options.filter_seed && snapshot->last_odometry);
+  EXPECT_EQ(snapshot->last_odometry->utime, run.odometry[cut - 1].utime);
+  EXPECT_LT(between(*snapshot->options.initial_pose, first.slam()->currentPose()).translation().norm(), 1e-12);
+
+  PsmSlamSession resumed(syntheticConfig(), snapshot->options);
+  resumed.onOdometry(*snapshot->last_odometry);
+  for (size_t k = cut; k < run.scans.size(); ++k) {
+    resumed.onOdometry(run.odometry[k]);
+    poses.push_back(resumed.onLaser(run.scans[k]).pose);
+  }
+  // As good as the same run without the restart (the online poses, before any optimisation).
+  PsmSlamSession uninterrupted(syntheticConfig(), {});
+  std::vector<PoseStamped> reference;
+  for (size_t k = 0; k < run.scans.size(); ++k) {
+    uninterrupted.onOdometry(run.odometry[k]);
+    reference.push_back(uninterrupted.onLaser(run.scans[k]).pose);
+  }
+  std::printf("worst online error after the restart: %.3f m resumed, %.3f m uninterrupted\n",
+              worstError(poses, run, cut), worstError(reference, run, cut));
+  EXPECT_LT(worstError(poses, run, cut), 1.25 * worstError(reference, run, cut) + 0.02);
+  const nlohmann::json report = resumed.finish();
+  EXPECT_GT(report["psm_slam"]["loop_closures"].get<int>(), 0) << "the second lap closes loops with the first";
+  EXPECT_EQ(report["psm_slam"]["map_loop_closures"], 0) << "its own map: the usual loop-closure rules";
+  fs::remove_all(dir);
+}
+
+TEST(PsmSlamSession, NoSnapshotIsNothingAndAPlainMapIsNotASnapshot) {
+  const fs::path dir = freshFolder("not-snapshots");
+  EXPECT_FALSE(readSessionSnapshot((dir / "absent").string(), {}));
+  SyntheticRunOptions options;
+  const SyntheticRun run = testing::simulateLoopRun(testing::makeLoopWorld(), options);
+  PsmSlamEstimator mapping(syntheticConfig());
+  for (size_t k = 0; k < run.scans.size(); ++k) {
+    mapping.onOdometry(run.odometry[k]);
+    mapping.onLaser(run.scans[k]);
+  }
+  saveMap((dir / "map").string(), mapping.storedMap());
+  EXPECT_THROW(readSessionSnapshot((dir / "map").string(), {}), MapFormatError);
+  fs::remove_all(dir);
+}
+
+TEST(PsmSlamSession, RefusesOptionsThatDoNotGoTogether) {
+  SavedMapOptions pose_without_map;
+  pose_without_map.initial_pose = Pose2();
+  EXPECT_THROW(PsmSlamSession(syntheticConfig(), pose_without_map), std::runtime_error);
+  SavedMapOptions bad_mode;
+  bad_mode.load_map = "/nonexistent";
+  bad_mode.mode = "explore";
+  EXPECT_THROW(PsmSlamSession(syntheticConfig(), bad_mode), std::runtime_error);
+  EXPECT_THROW(parseInitialPose("1,2"), std::runtime_error);
+  EXPECT_THROW(parseInitialPose("1,2,nan"), std::runtime_error);
+  EXPECT_LT(between(parseInitialPose("1.5,-2,0.25"), Pose2(1.5, -2.0, 0.25)).translation().norm(), 1e-12);
+}
+
+}  // namespace
+}  // namespace polarslam
