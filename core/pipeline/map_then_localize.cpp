@@ -22,6 +22,7 @@ MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, in
   nlohmann::json report;
   mapping.finish("", report);
   result.mapped = mapping.trajectory();
+  if (!result.mapped.empty()) result.mapped_end = result.mapped.back().pose;
   StoredMap map = mapping.storedMap();
   result.reference_scans = map.scans.size();
 

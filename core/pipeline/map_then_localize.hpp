@@ -21,6 +21,7 @@ struct MapThenLocalizeResult {
                                        ///< re-placed by the continued graph)
   std::vector<PoseStamped> localized;  ///< final localised poses after the split, map frame
   std::vector<PoseStamped> joined;     ///< both, in time order
+  Pose2 mapped_end;                    ///< the mapping's last pose as it stands in the saved map
   std::vector<PoseStamped> online;     ///< localised part as published at scan time
   std::vector<bool> tied_to_map;       ///< per online pose: localised (not odometry only)
   MapLocalizerStats stats;             ///< localize: the localiser's counts
