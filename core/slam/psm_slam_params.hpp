@@ -40,7 +40,7 @@ struct MapLocalizationParams {
   /// The best hit must be found from at least this many different reference scans (within
   /// confirm_translation / confirm_rotation of each other): a place that is really in the map is
   /// seen from its neighbouring reference scans too, a chance fit usually from one.
-  int global_min_support = 1;
+  int global_min_support = 2;
   double global_ambiguity_distance = 0.5;  ///< m
   /// The hit of the next search must agree with the previous one after the odometry in between.
   double confirm_translation = 0.15;     ///< m
