@@ -87,7 +87,7 @@ nlohmann::json psmSlamReportJson(const PsmSlam& slam, const PoseGraphOptimizatio
             {"overlap", s.references_overlap}}},
           {"candidate_matches", s.candidate_matches},
           {"loop_closures", s.loop_closures},
-          {"loop_failed_matches", s.loop_failed_matches}, {"loop_poor_matches", s.loop_poor_matches}, {"loop_ambiguous", s.loop_ambiguous}, {"loop_gate_rejections", s.loop_gate_rejections}, {"loop_unconfirmed", s.loop_unconfirmed},
+          {"loop_failed_matches", s.loop_failed_matches}, {"loop_poor_matches", s.loop_poor_matches}, {"loop_ambiguous", s.loop_ambiguous}, {"loop_gate_rejections", s.loop_gate_rejections}, {"loop_unconfirmed", s.loop_unconfirmed}, {"loop_refuted", s.loop_refuted}, {"loop_unverified", s.loop_unverified},
           {"optimizations", s.optimizations},
           {"optimization_seconds", s.optimization_seconds},
           {"rejected_loop_edges", s.rejected_loop_edges},

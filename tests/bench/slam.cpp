@@ -329,10 +329,10 @@ void runPsmOnly(const Options& o, const std::string& world_path) {
   constexpr double kMaxErrorGoal = 1.0;  // m
   std::printf("\n=== PSM SLAM only: world %s, robot %s, %d seeds from %llu\n", world_path.c_str(), o.robot.c_str(),
               o.seeds, static_cast<unsigned long long>(o.first_seed));
-  std::printf("%6s %8s %7s %7s | %6s %8s %6s %6s %6s | %6s %6s %6s\n", "seed", "seconds", "ATE", "max", "loops",
-              "ambiguous", "gated", "unconf", "disown", "edges", "wrong", "x real");
+  std::printf("%6s %8s %7s %7s | %6s %8s %6s %6s %6s %6s | %6s %6s %6s\n", "seed", "seconds", "ATE", "max", "loops",
+              "ambiguous", "gated", "unconf", "refute", "disown", "edges", "wrong", "x real");
   std::vector<double> ate, max_error, speed;
-  size_t over_goal = 0, accepted = 0, ambiguous = 0, gated = 0, unconfirmed = 0, disowned = 0, wrong_active = 0,
+  size_t over_goal = 0, accepted = 0, ambiguous = 0, gated = 0, unconfirmed = 0, refuted = 0, unverified = 0, disowned = 0, wrong_active = 0,
          runs_without_loop = 0;
   for (int k = 0; k < o.seeds; ++k) {
     const uint64_t seed = o.first_seed + static_cast<uint64_t>(k);
@@ -357,11 +357,13 @@ void runPsmOnly(const Options& o, const std::string& world_path) {
     ambiguous += s.loop_ambiguous;
     gated += s.loop_gate_rejections;
     unconfirmed += s.loop_unconfirmed;
+    refuted += s.loop_refuted;
+    unverified += s.loop_unverified;
     disowned += s.rejected_loop_edges;
     wrong_active += edges.wrong_active;
-    std::printf("%6llu %8.1f %7.3f %7.3f | %6zu %8zu %6zu %6zu %6zu | %6zu %6zu %6.1f%s\n",
+    std::printf("%6llu %8.1f %7.3f %7.3f | %6zu %8zu %6zu %6zu %6zu %6zu | %6zu %6zu %6.1f%s\n",
                 static_cast<unsigned long long>(seed), sim.time(), ate.back(), max_error.back(), s.loop_closures,
-                s.loop_ambiguous, s.loop_gate_rejections, s.loop_unconfirmed, s.rejected_loop_edges, edges.active,
+                s.loop_ambiguous, s.loop_gate_rejections, s.loop_unconfirmed, s.loop_refuted, s.rejected_loop_edges, edges.active,
                 edges.wrong_active, speed.back(), over ? "  OVER 1 m" : "");
     if (edges.wrong_active + edges.wrong_inactive > 0) checkLoopEdges(estimator.slam().graph(), TrajectoryLookup(truth), true);
     std::fflush(stdout);
@@ -381,6 +383,8 @@ void runPsmOnly(const Options& o, const std::string& world_path) {
               "loop closures refused per run (ambiguous)", static_cast<double>(ambiguous) / n);
   std::printf("  %-48s %10.1f   no goal\n", "... refused by the chi2 gate", static_cast<double>(gated) / n);
   std::printf("  %-48s %10.1f   no goal\n", "... waiting for a second closure", static_cast<double>(unconfirmed) / n);
+  std::printf("  %-48s %10.1f   no goal\n", "... refuted by a neighbouring reference scan", static_cast<double>(refuted) / n);
+  std::printf("  %-48s %10.1f   no goal\n", "... unverified in a prior wider than the search", static_cast<double>(unverified) / n);
   std::printf("  %-48s %10.1f   no goal\n", "... disowned by the optimiser", static_cast<double>(disowned) / n);
   std::printf("  %-48s %10.1f   goal >= 1 (real time)\n", "speed (x real time, mean)", mean(speed));
 }
