@@ -277,7 +277,7 @@ class PsmOnlySink : public SimSink {
  public:
   explicit PsmOnlySink(PsmSlamEstimator& estimator) : estimator_(estimator) {}
   void onLaser(const LaserScan& scan) override { estimator_.onLaser(scan); }
-  void onSonar(const SonarScan&) override {}
+  void onSonar(const SonarScan& scan) override { estimator_.onSonar(scan); }
   void onOdometry(const OdometryReading& odometry) override { estimator_.onOdometry(odometry); }
   void onGroundTruth(const PoseStamped& pose) override { truth.push_back(pose); }
   std::vector<PoseStamped> truth;
