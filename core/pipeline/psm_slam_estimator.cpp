@@ -32,6 +32,16 @@ void describePsmSlamEstimatorConfig(ParameterTable& table, PsmSlamEstimatorConfi
         return true;
       },
       [&c] { return std::string(c.map.all_scans ? "all" : "keyframes"); }, "the reference scans, or every scan");
+  ParameterTable& sonar = table.section("sonar", "advanced-sonar planes in the laser scans (where the robot has sonar)");
+  sonar.boolean("fill_planes", c.sonar.fill_planes, "walls the sonar sees fill the laser beams that pass them (glass)");
+  sonar.number("half_extent", c.sonar.fill.half_extent, 0.0, 100.0, "m along a wall either side of the echo");
+  sonar.number("margin", c.sonar.fill.margin, 0.0, 10.0, "m: a laser reading this far beyond the wall is behind it");
+  sonar.number("max_age", c.sonar.max_age, 0.0, 10.0, "s: older sonar scans are not used");
+  sonar.number("repeat_distance", c.sonar.fill.repeat_distance, 0.0, 10.0,
+               "m: a plane the previous sonar scan also saw lies this close to its line");
+  sonar.angle("repeat_angle_deg", c.sonar.fill.repeat_angle, 0.0, 180.0, "... and turned at most this much");
+  sonar.number("laser_seen_fraction", c.sonar.fill.laser_seen_fraction, 0.0, 1.0,
+               "a wall the laser sees along more of its beams is no glass: not filled");
 }
 
 PsmSlamEstimatorConfig loadPsmSlamEstimatorConfig(const std::string& yaml_path) {
@@ -55,12 +65,33 @@ PsmSlamEstimator::PsmSlamEstimator(PsmSlamEstimatorConfig config)
     : config_(std::move(config)), slam_(config_.slam), map_scans_(config_.map.all_scans) {}
 
 void PsmSlamEstimator::onOdometry(const OdometryReading& odometry) {
+  odometry_pose_ = odometry.pose;
   const auto start = std::chrono::steady_clock::now();
   slam_.addOdometry(odometry);
   slam_seconds_ += secondsSince(start);
 }
 
-void PsmSlamEstimator::onLaser(const LaserScan& scan) {
+void PsmSlamEstimator::onSonar(const SonarScan& scan) {
+  if (!config_.sonar.fill_planes) return;
+  SonarPlanesSeen seen{scan.utime, odometry_pose_, sonarPlanes(scan), {}};
+  if (const auto previous = sonar_planes_.find(scan.sensor_id); previous != sonar_planes_.end()) {
+    const Pose2 motion = between(previous->second.odometry, odometry_pose_);
+    std::vector<SonarPlane> before;
+    for (const SonarPlane& p : previous->second.planes) before.push_back(movedPlane(p, motion));
+    seen.repeated = repeatedPlanes(seen.planes, before, config_.sonar.fill);
+  }
+  sonar_planes_[scan.sensor_id] = std::move(seen);
+}
+
+void PsmSlamEstimator::onLaser(const LaserScan& laser) {
+  LaserScan scan = laser;
+  std::vector<SonarPlane> planes;
+  for (const auto& [sensor, seen] : sonar_planes_) {
+    if (std::abs(1e-6 * static_cast<double>(scan.utime - seen.utime)) > config_.sonar.max_age) continue;
+    const Pose2 motion = between(seen.odometry, odometry_pose_);  // robot now, in the robot frame of the sonar scan
+    for (const SonarPlane& p : seen.repeated) planes.push_back(movedPlane(p, motion));
+  }
+  if (!planes.empty()) sonar_filled_readings_ += fillFromSonarPlanes(scan, planes, config_.sonar.fill);
   const auto start = std::chrono::steady_clock::now();
   last_result_ = slam_.addScan(scan);
   slam_seconds_ += secondsSince(start);
@@ -108,7 +139,7 @@ nlohmann::json psmSlamReportJson(const PsmSlam& slam, const PoseGraphOptimizatio
           {"candidate_matches", s.candidate_matches},
           {"loop_closures", s.loop_closures},
           {"map_candidate_matches", s.map_candidate_matches}, {"map_loop_closures", s.map_loop_closures},
-          {"loop_failed_matches", s.loop_failed_matches}, {"loop_poor_matches", s.loop_poor_matches}, {"loop_ambiguous", s.loop_ambiguous}, {"loop_gate_rejections", s.loop_gate_rejections}, {"loop_unconfirmed", s.loop_unconfirmed},
+          {"loop_failed_matches", s.loop_failed_matches}, {"loop_poor_matches", s.loop_poor_matches}, {"loop_ambiguous", s.loop_ambiguous}, {"loop_gate_rejections", s.loop_gate_rejections}, {"loop_unconfirmed", s.loop_unconfirmed}, {"loop_refuted", s.loop_refuted}, {"loop_unverified", s.loop_unverified},
           {"optimizations", s.optimizations},
           {"optimization_seconds", s.optimization_seconds},
           {"rejected_loop_edges", s.rejected_loop_edges},
@@ -131,6 +162,7 @@ void PsmSlamEstimator::finish(const std::string& out_dir, nlohmann::json& report
   slam_seconds_ += secondsSince(start);
   nlohmann::json section = psmSlamReportJson(slam_, summary);
   section["slam_seconds"] = slam_seconds_;
+  section["sonar_filled_readings"] = sonar_filled_readings_;
   report["psm_slam"] = section;
   if (out_dir.empty()) {
     if (!save_map_dir_.empty()) saveWithGrid(report);

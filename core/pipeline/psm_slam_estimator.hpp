@@ -10,6 +10,7 @@
 // default): the keys of PsmSlamParams (psm_slam_params.hpp) plus a `grid:` section.
 #include <nlohmann/json.hpp>
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -18,6 +19,7 @@
 #include "map/map_store.hpp"
 #include "pipeline/estimator.hpp"
 #include "slam/psm_slam.hpp"
+#include "slam/sonar_planes.hpp"
 
 namespace polarslam {
 
@@ -30,9 +32,19 @@ struct PsmSlamMapOptions {
 /// The grid options of a PSM SLAM map (offline and in polarslam-grid).
 GridOptions gridOptions(const PsmSlamMapOptions& map);
 
+/// Advanced-sonar planes filled into the laser scans (slam/sonar_planes.hpp), when sonar arrives.
+/// Off by default: it keeps the simulated glass-partition loop within 0.6 m on 100 seeds (12 runs
+/// above 1 m without it), but the office gets worse (mean ATE 0.070 -> 0.110 m, 2 runs above 1 m).
+struct PsmSlamSonarOptions {
+  bool fill_planes = false;
+  SonarPlaneFillOptions fill;
+  double max_age = 0.3;  ///< s: older sonar scans are not used
+};
+
 struct PsmSlamEstimatorConfig {
   PsmSlamParams slam;
   PsmSlamMapOptions map;
+  PsmSlamSonarOptions sonar;
 };
 
 /// Every key of the configuration, bound to `config`.
@@ -48,6 +60,7 @@ class PsmSlamEstimator : public Estimator {
   std::string name() const override { return "psm-slam"; }
   void onOdometry(const OdometryReading& odometry) override;
   void onLaser(const LaserScan& scan) override;
+  void onSonar(const SonarScan& scan) override;
   /// Final trajectory after finish(), the online one before.
   const std::vector<PoseStamped>& trajectory() const override { return finished_ ? final_ : online_; }
   const std::vector<PoseStamped>& onlineTrajectory() const override { return online_; }
@@ -88,6 +101,16 @@ class PsmSlamEstimator : public Estimator {
   double slam_seconds_ = 0.0;
   std::string save_map_dir_;
   PsmSlamScanResult last_result_;
+  /// Latest planes per sonar array, with the time and odometry pose of their scan.
+  struct SonarPlanesSeen {
+    int64_t utime = 0;
+    Pose2 odometry;
+    std::vector<SonarPlane> planes;    ///< all of the scan's planes
+    std::vector<SonarPlane> repeated;  ///< those the previous scan of the array also had: used
+  };
+  std::map<int, SonarPlanesSeen> sonar_planes_;
+  Pose2 odometry_pose_;  ///< latest odometry pose
+  size_t sonar_filled_readings_ = 0;
 };
 
 /// Report figures of a run: counts, optimisation, graph size.

@@ -21,6 +21,12 @@ Mat3 inverseJacobian(const Pose2& p) {
   return J;
 }
 
+/// Standard deviation of a prediction's position along its most uncertain direction.
+double largestPositionSigma(const RelativePosePrediction& prediction) {
+  const Mat2 cov = prediction.cov.topLeftCorner<2, 2>();
+  return std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat2>(cov).eigenvalues().maxCoeff()));
+}
+
 /// The pose of b's keyframe seen from a's keyframe, from the same scan matched against both:
 /// z_a ⊕ ⊖z_b, with the two (independent) match covariances propagated.
 std::pair<Pose2, Mat3> composeThroughScan(const Pose2& z_a, const Mat3& R_a, const Pose2& z_b, const Mat3& R_b) {
@@ -88,8 +94,6 @@ void PsmSlam::addSeedKeyframes(const PsmSlamFilterSeed& seed) {
   }
   if (!filter_.hasKeyframe(seed.active))
     throw std::invalid_argument("the snapshot's active keyframe " + std::to_string(seed.active) + " is not in its filter");
-  for (Keyframe& k : keyframes_)
-    if (!skeleton_.count(k.id)) k.scan = PreparedScan{};
   filter_.setActiveKeyframe(seed.active);
 }
 
@@ -139,8 +143,6 @@ void PsmSlam::addMapSkeleton(const Pose2& start_pose) {
     if (!nearest || distance < nearest_distance) nearest = k.id, nearest_distance = distance;
   }
   if (!nearest) throw std::invalid_argument("no reference scan of the map can be matched");
-  for (Keyframe& k : keyframes_)
-    if (!skeleton_.count(k.id)) k.scan = PreparedScan{};  // never matched, as after marginalisation
   filter_.setActiveKeyframe(*nearest);
 }
 
@@ -184,7 +186,7 @@ std::vector<Pose2> PsmSlam::loopGuesses(const RelativePosePrediction& prior, boo
   std::vector<Pose2> guesses{prior.mean};
   const double step = params_.loop_guess_spacing;
   const Mat2 cov = prior.cov.topLeftCorner<2, 2>();
-  const double sigma = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat2>(cov).eigenvalues().maxCoeff()));
+  const double sigma = largestPositionSigma(prior);
   const double k = params_.loop_candidate_sigmas;
   if (!wide || !(step > 0.0) || k * sigma < step) return guesses;
   // A prior wider than PSM's basin: start also from a grid over the k-σ ellipse, keeping the
@@ -396,7 +398,7 @@ bool PsmSlam::selectReference(const LaserScan& scan, PreparedScan& prepared, con
       if (filter_.update(c.id, o->z, o->R, params_.chi2_gate).accepted) accepted.push_back(*o);
       continue;
     }
-    if (applyLoopClosure(c, *o)) {
+    if (applyLoopClosure(c, *o, prepared, scan.laser_pose)) {
       accepted.push_back(*o);
       loop = true;
       if (c.id < map_keyframes_) ++stats_.map_loop_closures;
@@ -434,8 +436,7 @@ void PsmSlam::addGraphEdge(int64_t from, int64_t to, const Pose2& z, const Mat3&
 }
 
 bool PsmSlam::needsConfirmation(const RelativePosePrediction& prediction) const {
-  const double variance = Eigen::SelfAdjointEigenSolver<Mat2>(prediction.cov.topLeftCorner<2, 2>()).eigenvalues().maxCoeff();
-  return std::sqrt(std::max(0.0, variance)) > params_.loop_confirm_sigma;
+  return largestPositionSigma(prediction) > params_.loop_confirm_sigma;
 }
 
 bool PsmSlam::confirmedByHypothesis(const Pose2& robot, const Pose2& map_pose) const {
@@ -450,12 +451,59 @@ bool PsmSlam::confirmedByHypothesis(const Pose2& robot, const Pose2& map_pose) c
   return false;
 }
 
-bool PsmSlam::applyLoopClosure(const Candidate& c, const Observation& o) {
+PsmSlam::Verification PsmSlam::verifyWithNeighbours(int64_t closure, const Pose2& closure_z, const PreparedScan& scan,
+                                                    const Pose2& mount) {
+  // Reference scans of the same pass as the closure's (ids within loop_min_keyframe_gap): their
+  // poses relative to it are known well, so the closure predicts closely where each of them
+  // must see the robot. Relative poses from the graph, which keeps the marginalised ones too.
+  const Pose2 closure_pose = graph_.node(closure).pose;
+  std::vector<std::pair<double, std::pair<int64_t, Pose2>>> neighbours;
+  const int64_t gap = std::max<int64_t>(1, params_.loop_min_keyframe_gap);
+  const int64_t last = static_cast<int64_t>(keyframes_.size()) - 1;
+  for (int64_t id = std::max<int64_t>(0, closure - gap + 1); id <= std::min(last, closure + gap - 1); ++id) {
+    if (id == closure || !isOld(id) || keyframe(id).scan.empty()) continue;
+    const Pose2 expected = between(graph_.node(id).pose, closure_pose) * closure_z;
+    if (expected.translation().norm() > params_.loop_search_radius ||
+        std::abs(expected.theta) > params_.loop_max_heading_difference)
+      continue;
+    neighbours.push_back({expected.translation().norm(), {id, expected}});
+  }
+  std::sort(neighbours.begin(), neighbours.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  if (neighbours.size() > static_cast<size_t>(std::max(0, params_.max_candidates_per_scan)))
+    neighbours.resize(static_cast<size_t>(std::max(0, params_.max_candidates_per_scan)));
+  bool agreed = false;
+  for (const auto& [distance, neighbour] : neighbours) {
+    const auto& [id, expected] = neighbour;
+    const std::optional<Observation> o = matchKeyframe(keyframe(id), scan, mount, {expected, Mat3::Zero()}, true, false);
+    if (!o || !goodMatch(*o, true)) continue;
+    const Pose2 miss = between(expected, o->z);
+    if (miss.translation().norm() > params_.loop_verify_translation || std::abs(miss.theta) > params_.loop_verify_rotation)
+      return Verification::Refuted;
+    agreed = true;
+  }
+  return agreed ? Verification::Agreed : Verification::NoEvidence;
+}
+
+bool PsmSlam::applyLoopClosure(const Candidate& c, const Observation& o, const PreparedScan& scan, const Pose2& mount) {
   double gate = params_.loop_chi2_gate;
   if (needsConfirmation(c.prediction)) {
-    // A wide prior lets an aliased match (a look-alike corridor) through the χ² gate; a second,
-    // independent closure that agrees with it is the evidence that it is the right place.
+    // A wide prior lets an aliased match (a look-alike corridor) through the χ² gate. Two
+    // independent checks: the closure's neighbouring reference scans must not see the robot
+    // elsewhere, and a second closure from a later scan must agree on the motion in between.
     const Pose2 robot = filter_.robotPose(), map_pose = filter_.keyframePose(c.id) * o.z;
+    const Verification verification = verifyWithNeighbours(c.id, o.z, scan, mount);
+    if (verification == Verification::Refuted) {
+      ++stats_.loop_refuted;
+      return false;
+    }
+    // Without a neighbour's say the closure rests on the robot being near this reference scan
+    // at all. When the prior is wider than the disc a loop search examines around it, the robot
+    // may well be somewhere else that merely looks alike, which no search has looked at.
+    if (verification == Verification::NoEvidence &&
+        params_.loop_candidate_sigmas * largestPositionSigma(c.prediction) > 2.0 * params_.loop_search_radius) {
+      ++stats_.loop_unverified;
+      return false;
+    }
     if (!confirmedByHypothesis(robot, map_pose)) {
       hypotheses_.push_back({stats_.scans, robot, map_pose});
       if (hypotheses_.size() > 16) hypotheses_.erase(hypotheses_.begin());
@@ -524,7 +572,6 @@ void PsmSlam::marginaliseOldKeyframes() {
     });
     if (covered) {
       marginaliseKeyframe(id);
-      keyframes_[static_cast<size_t>(id)].scan = PreparedScan{};  // never matched again
     } else {
       skeleton_.insert(id);
     }
@@ -534,7 +581,6 @@ void PsmSlam::marginaliseOldKeyframes() {
     if (*it == filter_.activeKeyframe()) ++it;
     const int64_t id = *it;
     marginaliseKeyframe(id);
-    keyframes_[static_cast<size_t>(id)].scan = PreparedScan{};
   }
 }
 

@@ -71,6 +71,8 @@ struct PsmSlamStats {
   size_t loop_ambiguous = 0;       ///< ... good, but another start in the prior found an equally good place
   size_t loop_gate_rejections = 0; ///< ... good, but outside the χ² gate of the prediction
   size_t loop_unconfirmed = 0;     ///< ... good, but a wide prior and no second closure agreeing (yet)
+  size_t loop_refuted = 0;         ///< ... good, but a neighbouring reference scan matched elsewhere
+  size_t loop_unverified = 0;      ///< ... good, but no neighbour matched and the prior is wider than a loop search
   size_t optimizations = 0;
   size_t rejected_loop_edges = 0;  ///< loop edges the optimiser found inconsistent
   double optimization_seconds = 0.0;
@@ -191,9 +193,16 @@ class PsmSlam {
   bool robotStill(const Observation& tracked) const;
   bool needsNewReference(const std::optional<Observation>& tracked);
   bool isOld(int64_t keyframe) const;
-  /// Loop-closure match with an old reference: gated, and confirmed by a second closure when the
-  /// prior is too wide for the gate to tell look-alike places apart. True if applied.
-  bool applyLoopClosure(const Candidate& c, const Observation& o);
+  /// Loop-closure match with an old reference: gated, and when the prior is too wide for the gate
+  /// to tell look-alike places apart, checked against the closure's neighbouring reference scans
+  /// and confirmed by a second closure. True if applied.
+  bool applyLoopClosure(const Candidate& c, const Observation& o, const PreparedScan& scan, const Pose2& mount);
+  enum class Verification { Agreed, Refuted, NoEvidence };
+  /// The scan matched against the old reference scans that neighbour `closure` (taken in the same
+  /// pass, near where the closure, robot pose `closure_z` in its frame, puts the robot), each
+  /// from the pose the closure implies.
+  Verification verifyWithNeighbours(int64_t closure, const Pose2& closure_z, const PreparedScan& scan,
+                                    const Pose2& mount);
   bool needsConfirmation(const RelativePosePrediction& prediction) const;
   bool confirmedByHypothesis(const Pose2& robot, const Pose2& map_pose) const;
   std::vector<Candidate> referenceCandidates() const;

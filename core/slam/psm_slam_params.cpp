@@ -90,6 +90,9 @@ void describeLoops(ParameterTable& t, PsmSlamParams& p) {
   t.number("loop_ambiguity_distance", p.loop_ambiguity_distance, 0.0, 1000.0, "m: another fit this far away ...");
   t.number("loop_ambiguity_ratio", p.loop_ambiguity_ratio, 1.0, 1000.0, "... this nearly as good: ambiguous");
   t.angle("loop_ambiguity_heading_deg", p.loop_ambiguity_heading, 0.0, 180.0, "... at about this heading");
+  t.number("loop_verify_translation", p.loop_verify_translation, 0.0, 100.0,
+           "m: a neighbouring reference's match this far from the closure refutes it");
+  t.angle("loop_verify_rotation_deg", p.loop_verify_rotation, 0.0, 180.0, "the same for heading");
   t.angle("loop_search_window_deg", p.loop_search_window, 0.5, 180.0, "matcher orientation window for loops");
 }
 

@@ -9,6 +9,11 @@
 //     bounds of an average over that many Monte Carlo runs.
 //  3. Speed: time per EKF update (association + update) with 100, 300 and 1000 map features, and
 //     each configuration's whole-run speed as a multiple of real time.
+//  --psm-only: PSM SLAM alone (no EKF, no speed table) over many seeds, for issue 19's "no wrong
+//     loop closure, ever": runs whose maximum error exceeds 1 m, the worst maximum error, the
+//     mean ATE and the loop closures accepted and refused, each next to its goal; a loop edge is
+//     counted wrong when it disagrees with the true relative pose of its two reference scans
+//     (0.3 m or 5 deg, and beyond its own covariance).
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -47,6 +52,7 @@ struct Options {
   std::string nees_trace;  ///< CSV of per-second NEES of every configuration (first seed)
   std::string psm_config;  ///< PSM SLAM parameters (YAML), default parameters when empty
   bool claim = true, speed = true;
+  bool psm_only = false;
 };
 
 /// One estimator fed from the simulator, with the wall time spent inside it.
@@ -265,6 +271,124 @@ void runClaim(const Options& o, const std::string& world_path) {
   }
 }
 
+// ---- PSM SLAM alone -----------------------------------------------------------------------------
+
+class PsmOnlySink : public SimSink {
+ public:
+  explicit PsmOnlySink(PsmSlamEstimator& estimator) : estimator_(estimator) {}
+  void onLaser(const LaserScan& scan) override { estimator_.onLaser(scan); }
+  void onSonar(const SonarScan& scan) override { estimator_.onSonar(scan); }
+  void onOdometry(const OdometryReading& odometry) override { estimator_.onOdometry(odometry); }
+  void onGroundTruth(const PoseStamped& pose) override { truth.push_back(pose); }
+  std::vector<PoseStamped> truth;
+
+ private:
+  PsmSlamEstimator& estimator_;
+};
+
+/// A loop edge whose measurement is this far from the true relative pose of its nodes, and
+/// farther than its covariance allows (χ²₃(0.999)), is wrong: along a corridor a match may be
+/// off by more and say so in its covariance.
+constexpr double kWrongLoopTranslation = 0.3;        // m
+constexpr double kWrongLoopRotation = 5.0 * M_PI / 180.0;
+constexpr double kWrongLoopChi2 = 16.27;
+
+struct LoopEdgeCheck {
+  size_t active = 0, inactive = 0;
+  size_t wrong_active = 0, wrong_inactive = 0;
+  double worst_active_miss = 0.0;  ///< m: largest distance of an active loop edge from the truth
+};
+
+LoopEdgeCheck checkLoopEdges(const PoseGraph& graph, const TrajectoryLookup& truth, bool print) {
+  LoopEdgeCheck check;
+  for (const PoseGraphEdge& e : graph.edges()) {
+    if (e.kind != PoseGraphEdgeKind::Loop) continue;
+    (e.active ? check.active : check.inactive) += 1;
+    const auto a = truth.interpolate(graph.node(e.from).utime, 100000);
+    const auto b = truth.interpolate(graph.node(e.to).utime, 100000);
+    if (!a || !b) continue;
+    const Pose2 miss = between(between(*a, *b), e.measurement);
+    const bool wrong = (miss.translation().norm() > kWrongLoopTranslation || std::abs(miss.theta) > kWrongLoopRotation) &&
+                       edgeChiSquared(*a, *b, e) > kWrongLoopChi2;
+    if (e.active) check.worst_active_miss = std::max(check.worst_active_miss, miss.translation().norm());
+    if (wrong) (e.active ? check.wrong_active : check.wrong_inactive) += 1;
+    if (wrong && print)
+      std::printf("         wrong loop edge %lld -> %lld (%s): off the truth by %.2f m, %.1f deg (true nodes at %.2f %.2f "
+                  "and %.2f %.2f, start frame)\n",
+                  static_cast<long long>(e.from), static_cast<long long>(e.to), e.active ? "active" : "disowned",
+                  miss.translation().norm(), rad2deg(miss.theta), a->x, a->y, b->x, b->y);
+  }
+  return check;
+}
+
+void runPsmOnly(const Options& o, const std::string& world_path) {
+  const World world = loadWorld(world_path);
+  const RobotDescription robot = loadRobotDescription(o.robot);
+  const PsmSlamEstimatorConfig config =
+      o.psm_config.empty() ? PsmSlamEstimatorConfig{} : loadPsmSlamEstimatorConfig(o.psm_config);
+  constexpr double kMaxErrorGoal = 1.0;  // m
+  std::printf("\n=== PSM SLAM only: world %s, robot %s, %d seeds from %llu\n", world_path.c_str(), o.robot.c_str(),
+              o.seeds, static_cast<unsigned long long>(o.first_seed));
+  std::printf("%6s %8s %7s %7s | %6s %8s %6s %6s %6s %6s | %6s %6s %6s\n", "seed", "seconds", "ATE", "max", "loops",
+              "ambiguous", "gated", "unconf", "refute", "disown", "edges", "wrong", "x real");
+  std::vector<double> ate, max_error, speed;
+  size_t over_goal = 0, accepted = 0, ambiguous = 0, gated = 0, unconfirmed = 0, refuted = 0, unverified = 0, disowned = 0, wrong_active = 0,
+         runs_without_loop = 0;
+  for (int k = 0; k < o.seeds; ++k) {
+    const uint64_t seed = o.first_seed + static_cast<uint64_t>(k);
+    PsmSlamEstimator estimator(config);
+    PsmOnlySink sink(estimator);
+    Simulator sim(world, robot, seed);
+    const double limit = o.seconds > 0 ? o.seconds : 3600.0;
+    while (sim.time() < limit && !sim.finished()) sim.step(sink);
+    nlohmann::json report;
+    estimator.finish("", report);
+    const std::vector<PoseStamped> truth = inStartFrame(sink.truth);
+    const AteResult result = evaluateAte(estimator.trajectory(), truth);
+    const PsmSlamStats& s = estimator.slam().stats();
+    ate.push_back(result.raw_translation.rmse);
+    max_error.push_back(result.raw_translation.max);
+    speed.push_back(estimator.slamSeconds() > 0 ? sim.time() / estimator.slamSeconds() : 0.0);
+    const bool over = max_error.back() > kMaxErrorGoal;
+    over_goal += over;
+    const LoopEdgeCheck edges = checkLoopEdges(estimator.slam().graph(), TrajectoryLookup(truth), false);
+    accepted += s.loop_closures;
+    runs_without_loop += s.loop_closures == 0;
+    ambiguous += s.loop_ambiguous;
+    gated += s.loop_gate_rejections;
+    unconfirmed += s.loop_unconfirmed;
+    refuted += s.loop_refuted;
+    unverified += s.loop_unverified;
+    disowned += s.rejected_loop_edges;
+    wrong_active += edges.wrong_active;
+    std::printf("%6llu %8.1f %7.3f %7.3f | %6zu %8zu %6zu %6zu %6zu %6zu | %6zu %6zu %6.1f%s\n",
+                static_cast<unsigned long long>(seed), sim.time(), ate.back(), max_error.back(), s.loop_closures,
+                s.loop_ambiguous, s.loop_gate_rejections, s.loop_unconfirmed, s.loop_refuted, s.rejected_loop_edges, edges.active,
+                edges.wrong_active, speed.back(), over ? "  OVER 1 m" : "");
+    if (edges.wrong_active + edges.wrong_inactive > 0) checkLoopEdges(estimator.slam().graph(), TrajectoryLookup(truth), true);
+    std::fflush(stdout);
+  }
+  const auto n = static_cast<double>(o.seeds);
+  std::printf("\nPSM SLAM over %d seeds from %llu (%s)\n", o.seeds, static_cast<unsigned long long>(o.first_seed),
+              world.name.c_str());
+  std::printf("  %-48s %10zu   goal 0\n", "runs with maximum error above 1 m", over_goal);
+  std::printf("  %-48s %10.3f   goal <= %.1f m\n", "worst maximum error (m)", *std::max_element(max_error.begin(), max_error.end()),
+              kMaxErrorGoal);
+  std::printf("  %-48s %10.3f   goal <= 0.10 m\n", "mean ATE (m)", mean(ate));
+  std::printf("  %-48s %10zu   goal 0\n", "active loop edges off the truth (see above)", wrong_active);
+  std::printf("  %-48s %10zu   goal 0 (every run closes its loop)\n", "runs without an accepted loop closure",
+              runs_without_loop);
+  std::printf("  %-48s %10.1f   goal >= 1\n", "loop closures accepted per run", static_cast<double>(accepted) / n);
+  std::printf("  %-48s %10.1f   no goal: refusing is safe, wrong closures are not\n",
+              "loop closures refused per run (ambiguous)", static_cast<double>(ambiguous) / n);
+  std::printf("  %-48s %10.1f   no goal\n", "... refused by the chi2 gate", static_cast<double>(gated) / n);
+  std::printf("  %-48s %10.1f   no goal\n", "... waiting for a second closure", static_cast<double>(unconfirmed) / n);
+  std::printf("  %-48s %10.1f   no goal\n", "... refuted by a neighbouring reference scan", static_cast<double>(refuted) / n);
+  std::printf("  %-48s %10.1f   no goal\n", "... unverified in a prior wider than the search", static_cast<double>(unverified) / n);
+  std::printf("  %-48s %10.1f   no goal\n", "... disowned by the optimiser", static_cast<double>(disowned) / n);
+  std::printf("  %-48s %10.1f   goal >= 1 (real time)\n", "speed (x real time, mean)", mean(speed));
+}
+
 // ---- Speed -----------------------------------------------------------------------------------------
 
 /// A map of n point features on a grid around the robot, then timed updates that each observe
@@ -339,9 +463,14 @@ int main(int argc, char** argv) {
   app.add_option("--psm-config", o.psm_config, "PSM SLAM parameters (YAML)")->check(CLI::ExistingFile);
   app.add_option("--nees-trace", o.nees_trace, "write PREFIX.<sensors>.csv: per-second NEES of the first seed");
   app.add_flag("--speed-only", speed_only, "only the update timing");
+  app.add_flag("--psm-only", o.psm_only, "PSM SLAM alone over the seeds: wrong loop closures (issue 19); no speed table");
   app.add_flag("--no-speed", no_speed, "skip the update timing");
   CLI11_PARSE(app, argc, argv);
   try {
+    if (o.psm_only) {
+      for (const std::string& world : o.worlds) runPsmOnly(o, world);
+      return 0;
+    }
     if (!speed_only)
       for (const std::string& world : o.worlds) runClaim(o, world);
     if (!no_speed) {
