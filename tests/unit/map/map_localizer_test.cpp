@@ -22,9 +22,7 @@ using testing::SyntheticRunOptions;
 
 PsmSlamEstimatorConfig testConfig() {
   PsmSlamEstimatorConfig c;
-  c.slam.odometry.poses.k_distance = 4e-4;  // the simulated odometry's noise (synthetic_run.hpp)
-  c.slam.odometry.poses.k_heading_per_rad = 1e-4;
-  c.slam.odometry.poses.k_heading_per_m = 2e-4;
+  c.slam.odometry.poses = testing::syntheticOdometryModel();
   return c;
 }
 

@@ -34,9 +34,7 @@ struct AnchoredRun {
 
 std::unique_ptr<AnchoredRun> runAnchored(const testing::SyntheticRun& run) {
   PsmSlamParams params;
-  params.odometry.poses.k_distance = 4e-4;
-  params.odometry.poses.k_heading_per_rad = 1e-4;
-  params.odometry.poses.k_heading_per_m = 2e-4;
+  params.odometry.poses = testing::syntheticOdometryModel();
   auto out = std::make_unique<AnchoredRun>(AnchoredRun{{}, {}, PsmSlam(params)});
   for (size_t k = 0; k < run.scans.size(); ++k) {
     out->slam.addOdometry(run.odometry[k]);

@@ -17,9 +17,7 @@ using testing::SyntheticRunOptions;
 
 PsmSlamParams testParams() {
   PsmSlamParams p;
-  p.odometry.poses.k_distance = 4e-4;        // the simulated odometry's noise (synthetic_run.hpp)
-  p.odometry.poses.k_heading_per_rad = 1e-4;
-  p.odometry.poses.k_heading_per_m = 2e-4;   // covers the 0.01 rad/m heading bias
+  p.odometry.poses = testing::syntheticOdometryModel();
   return p;
 }
 

@@ -10,6 +10,7 @@
 
 #include "geometry/features.hpp"
 #include "laser/laser_scan.hpp"
+#include "odometry/odometry_model.hpp"
 #include "odometry/odometry_reading.hpp"
 #include "sim/world.hpp"
 
@@ -45,6 +46,16 @@ struct SyntheticRunOptions {
   int stationary_scans_at_start = 0;      ///< robot standing still before it drives
   uint64_t seed = 7;
 };
+
+/// The pose-increment error model of the runs' odometry with the default options (σ = 0.02 m per
+/// √m of distance, 0.01 rad per √(rad + m) of heading, a heading bias of 0.01 rad per metre).
+inline PoseIncrementErrorParams syntheticOdometryModel() {
+  PoseIncrementErrorParams p;
+  p.k_distance = 4e-4;
+  p.k_heading_per_rad = 1e-4;
+  p.k_heading_per_m = 2e-4;  // covers the heading bias
+  return p;
+}
 
 struct SyntheticRun {
   std::vector<LaserScan> scans;
