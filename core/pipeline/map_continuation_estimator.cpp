@@ -21,6 +21,7 @@ void MapContinuationEstimator::startMapping(const Pose2& pose, const Mat3& cov,
     localizer_.reset();
   }
   mapping_.continueMap(map_, pose, cov, seed);
+  map_ = StoredMap{};  // the mapping holds its graph and scans now
   // The integrator starts from the latest reading, so no motion since it is lost.
   if (last_odometry_) mapping_.onOdometry(*last_odometry_);
 }

@@ -46,7 +46,7 @@ class MapContinuationEstimator : public Estimator {
  private:
   void startMapping(const Pose2& pose, const Mat3& cov, const std::optional<PsmSlamFilterSeed>& seed = std::nullopt);
 
-  StoredMap map_;
+  StoredMap map_;  ///< until mapping starts
   PsmSlamEstimator mapping_;
   std::unique_ptr<MapLocalizer> localizer_;  ///< until the start is found
   nlohmann::json search_report_;             ///< the localiser's figures when the start was found

@@ -135,10 +135,7 @@ void PsmSlamSession::writeSnapshot(const std::string& dir, nlohmann::json resume
   const PsmSlam& slam = m->slam();
   // The map's poses are taken as known when resuming: the robot's uncertainty relative to its
   // reference scan is what it keeps.
-  const int64_t active = slam.filter().activeKeyframe();
-  const RelativePosePrediction relative = slam.filter().predictRelative(active);
-  const Mat3 J = composeJacobianB(slam.filter().keyframePose(active));
-  const Mat3 cov = J * relative.cov * J.transpose();
+  const Mat3 cov = slam.uncertaintyFromRobot(slam.filter().activeKeyframe());
   resume["pose"] = poseJson(slam.currentPose());
   const PsmSlamFilterSeed seed = slam.filterSeed();
   nlohmann::json keyframes = nlohmann::json::array();

@@ -71,22 +71,21 @@ void PsmSlam::continueMap(const PoseGraph& graph, const std::vector<LaserScan>& 
   }
   graph_ = graph;
   for (const auto& [id, cov] : node_covariances) left_filter_cov_[id] = cov;
-  map_keyframes_ = static_cast<int64_t>(keyframes_.size());
-  keyframes_at_last_optimization_ = map_keyframes_;
+  keyframes_at_last_optimization_ = static_cast<int64_t>(keyframes_.size());
   filter_.reset(start_pose, start_cov);
   last_scan_pose_ = start_pose;
   started_ = true;
   if (seed) {
-    map_keyframes_ = 0;
-    addSeedKeyframes(*seed);
+    addSeedKeyframes(*seed);  // its own map: map_keyframes_ stays 0
   } else {
+    map_keyframes_ = static_cast<int64_t>(keyframes_.size());
     addMapSkeleton(start_pose);
   }
 }
 
 void PsmSlam::addSeedKeyframes(const PsmSlamFilterSeed& seed) {
   for (const auto& [id, cov] : seed.keyframes) {
-    if (id < 0 || id >= static_cast<int64_t>(keyframes_.size()) || keyframe(id).scan.size() == 0)
+    if (id < 0 || id >= static_cast<int64_t>(keyframes_.size()) || keyframe(id).scan.empty())
       throw std::invalid_argument("the snapshot's filter keyframe " + std::to_string(id) + " is not a matchable map node");
     filter_.addIndependentKeyframe(id, graph_.node(id).pose, cov);
     filter_keyframes_.insert(id);
@@ -110,12 +109,16 @@ std::vector<std::pair<int64_t, Mat3>> PsmSlam::nodeCovariances() const {
   return out;
 }
 
+Mat3 PsmSlam::uncertaintyFromRobot(int64_t id) const {
+  const Mat3 J = composeJacobianB(filter_.keyframePose(id));
+  return J * filter_.predictRelative(id).cov * J.transpose();
+}
+
 PsmSlamFilterSeed PsmSlam::filterSeed() const {
   PsmSlamFilterSeed seed;
   seed.active = filter_.activeKeyframe();
   for (const int64_t id : filter_keyframes_) {
-    const Mat3 J = composeJacobianB(filter_.keyframePose(id));
-    seed.keyframes.emplace_back(id, J * filter_.predictRelative(id).cov * J.transpose() + covarianceFloor(1e-4, 1e-5));
+    seed.keyframes.emplace_back(id, uncertaintyFromRobot(id) + covarianceFloor(1e-4, 1e-5));
   }
   return seed;
 }
@@ -127,14 +130,9 @@ void PsmSlam::addMapSkeleton(const Pose2& start_pose) {
   std::optional<int64_t> nearest;
   double nearest_distance = 0.0;
   for (const Keyframe& k : keyframes_) {
-    if (k.scan.size() == 0) continue;
+    if (k.scan.empty()) continue;
     const Pose2 pose = graph_.node(k.id).pose;
-    const bool covered = std::any_of(skeleton_.begin(), skeleton_.end(), [&](int64_t kept) {
-      const Pose2 other = graph_.node(kept).pose;
-      return (other.translation() - pose.translation()).norm() < params_.skeleton_spacing &&
-             std::abs(wrapAngle(other.theta - pose.theta)) < params_.skeleton_heading;
-    });
-    if (covered) continue;
+    if (skeletonCovers(pose)) continue;
     const auto saved = left_filter_cov_.find(k.id);
     filter_.addIndependentKeyframe(k.id, pose, saved == left_filter_cov_.end() ? known : saved->second + known);
     filter_keyframes_.insert(k.id);
@@ -556,6 +554,14 @@ void PsmSlam::marginaliseKeyframe(int64_t id) {
   skeleton_.erase(id);
 }
 
+bool PsmSlam::skeletonCovers(const Pose2& pose) const {
+  return std::any_of(skeleton_.begin(), skeleton_.end(), [&](int64_t kept) {
+    const Pose2 other = filter_.keyframePose(kept);
+    return (other.translation() - pose.translation()).norm() < params_.skeleton_spacing &&
+           std::abs(wrapAngle(other.theta - pose.theta)) < params_.skeleton_heading;
+  });
+}
+
 void PsmSlam::marginaliseOldKeyframes() {
   // Keyframes that have just left the recent window: keep one if it adds to the skeleton.
   const int64_t window_start = filter_.activeKeyframe() - std::max(1, params_.filter_window);
@@ -564,13 +570,7 @@ void PsmSlam::marginaliseOldKeyframes() {
                                         [&](int64_t id) { return id < window_start && !skeleton_.count(id); });
     if (candidate == filter_keyframes_.end()) break;
     const int64_t id = *candidate;
-    const Pose2 pose = filter_.keyframePose(id);
-    const bool covered = std::any_of(skeleton_.begin(), skeleton_.end(), [&](int64_t kept) {
-      const Pose2 other = filter_.keyframePose(kept);
-      return (other.translation() - pose.translation()).norm() < params_.skeleton_spacing &&
-             std::abs(wrapAngle(other.theta - pose.theta)) < params_.skeleton_heading;
-    });
-    if (covered) {
+    if (skeletonCovers(filter_.keyframePose(id))) {
       marginaliseKeyframe(id);
     } else {
       skeleton_.insert(id);

@@ -116,6 +116,8 @@ class PsmSlam {
   std::vector<std::pair<int64_t, Mat3>> nodeCovariances() const;
   /// What a snapshot keeps of the filter (see PsmSlamFilterSeed).
   PsmSlamFilterSeed filterSeed() const;
+  /// The uncertainty of keyframe `id` relative to the robot, as a covariance in the map frame.
+  Mat3 uncertaintyFromRobot(int64_t id) const;
   /// Cumulative odometry. Bad readings are counted and ignored.
   void addOdometry(const OdometryReading& reading);
   /// One laser scan; never throws for bad content (malformed scans count as unusable).
@@ -213,6 +215,8 @@ class PsmSlam {
                    const std::optional<RelativePosePrediction>& link, int64_t previous);
   void addGraphEdge(int64_t from, int64_t to, const Pose2& z, const Mat3& R, PoseGraphEdgeKind kind);
   void marginaliseOldKeyframes();
+  /// A skeleton keyframe lies within skeleton_spacing and skeleton_heading of `pose`.
+  bool skeletonCovers(const Pose2& pose) const;
   void marginaliseKeyframe(int64_t id);
   void syncGraphFromFilter();
   void record(int64_t utime, PsmSlamScanResult& result);

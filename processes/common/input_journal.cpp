@@ -17,7 +17,7 @@ std::string InputJournal::currentLaunchId() {
   return id ? id : "";
 }
 
-std::vector<LogEvent> InputJournal::readOwnEvents() {
+std::vector<LogEvent> InputJournal::readEvents() {
   std::vector<LogEvent> events;
   std::error_code size_error;
   if (std::filesystem::file_size(path_, size_error) == 0 || size_error) return events;
@@ -53,8 +53,6 @@ std::vector<LogEvent> InputJournal::recover() {
   rewrite(generation_, events);
   return events;
 }
-
-std::vector<LogEvent> InputJournal::readEvents() { return readOwnEvents(); }
 
 void InputJournal::rewrite(uint64_t generation, const std::vector<LogEvent>& events) {
   const std::string tmp = path_ + ".tmp";

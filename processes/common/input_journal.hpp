@@ -62,8 +62,6 @@ class InputJournal {
   const std::string& refused() const { return refused_; }
 
  private:
-  std::vector<LogEvent> readOwnEvents();
-
   std::string path_, launch_id_, refused_;
   uint64_t generation_ = 0;
   size_t events_ = 0;
