@@ -19,6 +19,7 @@
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
 #include "common/pose_graph_message.hpp"
+#include "common/saved_map_options.hpp"
 #include "map/map_store.hpp"
 #include "pipeline/psm_slam_session.hpp"
 #include "polarslam/map_request_t.hpp"
@@ -117,22 +118,14 @@ int main(int argc, char** argv) {
   app.add_option("--pose-channel", channels.pose, "channel of the robot poses (pose_t)")->capture_default_str();
   app.add_option("--anchors-channel", channels.anchors, "poses relative to their reference scan")->capture_default_str();
   app.add_option("--graph-channel", channels.graph, "channel of the pose graph (pose_graph_t)")->capture_default_str();
-  SavedMapOptions map_options;
-  std::string initial_pose;
-  app.add_option("--save-map", map_options.save_map,
+  std::string save_map;
+  app.add_option("--save-map", save_map,
                  "save the map (pose graph, reference scans, grid, parameters) to this folder on exit and on "
                  "every SAVE_MAP request, replacing the older map only once the new one is complete");
   app.add_option("--save-map-channel", channels.save_map, "channel of the save requests (map_request_t)")
       ->capture_default_str();
-  app.add_option("--load-map", map_options.load_map, "a map saved by --save-map to work in (see --mode)")
-      ->check(CLI::ExistingDirectory);
-  app.add_option("--mode", map_options.mode,
-                 "with --load-map: localize = match against the stored reference scans and add none; continue = "
-                 "map on from the stored map")
-      ->check(CLI::IsMember({"localize", "continue"}))->capture_default_str();
-  app.add_option("--initial-pose", initial_pose,
-                 "with --load-map: the start in the map frame, x,y,theta (m, m, rad); without it the start is "
-                 "searched among the reference scans");
+  SavedMapCli saved_map;
+  saved_map.add(app);
   JournalOptions journal;
   addJournalOptions(app, journal);
   double snapshot_period = 60.0;
@@ -145,7 +138,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    if (!initial_pose.empty()) map_options.initial_pose = parseInitialPose(initial_pose);
+    const SavedMapOptions map_options = saved_map.resolve(save_map);
     const bool snapshots = !journal.path.empty() && snapshot_period > 0.0;
     const std::string snapshot_dir = journal.path + ".snapshot";
     const std::optional<SessionSnapshot> snapshot =

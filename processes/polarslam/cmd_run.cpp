@@ -16,6 +16,7 @@
 #include "io/tum.hpp"
 #include "offline_log.hpp"
 #include "pipeline/pipelines.hpp"
+#include "common/saved_map_options.hpp"
 #include "pipeline/psm_slam_session.hpp"
 #include "map/map_store.hpp"
 #include "pipeline/psm_slam_estimator.hpp"
@@ -31,25 +32,17 @@ struct RunOptions {
   double max_time_jump_s = 10.0;
   std::string save_map;  ///< psm-slam: folder the map is saved to (core/map/map_store.hpp)
   bool strict = false;    ///< a run without usable laser data is an error, not a warning
-  std::string load_map;   ///< psm-slam: a saved map to localise in (core/slam/map_localizer.hpp)
-  std::string mode = "localize";
-  std::string initial_pose;  ///< "x,y,theta" in the map frame (m, m, rad); empty: search globally
+  SavedMapCli map;        ///< psm-slam: --load-map, --mode, --initial-pose (docs/maps.md)
 };
 
 /// The estimator of a run: the pipeline's, or PSM SLAM with its map options. Refuses options
 /// that do not go together.
 std::unique_ptr<Estimator> makeEstimator(const RunOptions& o) {
-  if (o.pipeline == "psm-slam") {
-    SavedMapOptions map;
-    map.load_map = o.load_map;
-    map.mode = o.mode;
-    map.save_map = o.save_map;
-    if (!o.initial_pose.empty()) map.initial_pose = parseInitialPose(o.initial_pose);
-    return makePsmSlamEstimator(loadPsmSlamEstimatorConfig(o.pipeline_options.config), map);
-  }
+  if (o.pipeline == "psm-slam")
+    return makePsmSlamEstimator(loadPsmSlamEstimatorConfig(o.pipeline_options.config), o.map.resolve(o.save_map));
   if (!o.save_map.empty()) throw std::runtime_error("--save-map goes with --pipeline psm-slam");
-  if (!o.load_map.empty()) throw std::runtime_error("--load-map goes with --pipeline psm-slam");
-  if (!o.initial_pose.empty()) throw std::runtime_error("--initial-pose goes with --load-map");
+  if (!o.map.loadMap().empty()) throw std::runtime_error("--load-map goes with --pipeline psm-slam");
+  if (o.map.hasInitialPose()) throw std::runtime_error("--initial-pose goes with --load-map");
   return pipelines().at(o.pipeline)(o.pipeline_options);
 }
 
@@ -233,8 +226,8 @@ void runPipeline(RunOptions o) {
   if ((o.pipeline == "recorded") != !o.channels.estimated_pose.empty())
     throw std::runtime_error("--pose-channel goes with --pipeline recorded, and only with it");
   const std::string label = o.pipeline == "recorded" ? o.channels.estimated_pose + " (recorded)"
-                            : o.load_map.empty() ? o.pipeline
-                                                 : o.pipeline + " (" + o.mode + " in " + o.load_map + ")";
+                            : o.map.loadMap().empty() ? o.pipeline
+                                                      : o.pipeline + " (" + o.map.mode() + " in " + o.map.loadMap() + ")";
   if (o.pipeline == "recorded") addRecordedChannels(o.channels);
   const std::string final_out = o.out;
   const StopOnSignals stop;
@@ -332,17 +325,7 @@ void setupRun(CLI::App& sub) {
   sub.add_option("--save-map", o->save_map,
                  "with --pipeline psm-slam: save the map (pose graph, reference scans, grid, parameters) to this "
                  "folder, replacing an older map there only once the new one is complete");
-  sub.add_option("--load-map", o->load_map,
-                 "with --pipeline psm-slam: a map saved by --save-map to work in (see --mode)")
-      ->check(CLI::ExistingDirectory);
-  sub.add_option("--mode", o->mode,
-                 "with --load-map: localize = match against the stored reference scans and add none; continue = "
-                 "map on from the stored map (new reference scans and loop closures join its graph; --save-map "
-                 "saves the whole)")
-      ->check(CLI::IsMember({"localize", "continue"}))->capture_default_str();
-  sub.add_option("--initial-pose", o->initial_pose,
-                 "with --load-map: the start in the map frame, x,y,theta (m, m, rad); without it the start is "
-                 "searched among the reference scans");
+  o->map.add(sub);
   sub.add_flag("--strict", o->strict,
                "fail, instead of warning, when a laser pipeline finds no usable scan (no LASER message, or no valid range)");
   sub.add_option("--max-time-jump", o->max_time_jump_s,
