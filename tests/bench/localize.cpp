@@ -71,25 +71,23 @@ int main(int argc, char** argv) {
   const RelationMetric localised_second = evaluateRelations(result.localized, second_half);
   const RelationMetric full_across = evaluateRelations(full_run.trajectory(), across_split);
   const RelationMetric joined_across = evaluateRelations(result.joined, across_split);
-  // Full-run SLAM places both halves in one frame: a second-half scan whose full-run pose is
-  // within 2 m and 90° of a first-half pose is in a mapped place. A fix anywhere else is wrong
-  // (the place is not in the map), whatever the map's own distortion.
   const std::vector<PoseStamped>& full_poses = full_run.trajectory();
-  auto mappedPlace = [&](int64_t utime) {
-    const auto at = std::find_if(full_poses.begin(), full_poses.end(), [&](const PoseStamped& p) { return p.utime == utime; });
-    if (at == full_poses.end()) return false;
-    return std::any_of(full_poses.begin(), full_poses.end(), [&](const PoseStamped& q) {
-      return q.utime < split && (q.pose.translation() - at->pose.translation()).norm() <= 2.0 &&
-             std::abs(wrapAngle(q.pose.theta - at->pose.theta)) <= M_PI / 2;
-    });
-  };
-  // A fix is judged against where the robot must be in the map: the mapping's last pose moved on by
-  // full-run SLAM's motion since (its relations are good to centimetres over such spans).
   auto fullPose = [&](int64_t utime) -> std::optional<Pose2> {
     const auto at = std::find_if(full_poses.begin(), full_poses.end(), [&](const PoseStamped& p) { return p.utime == utime; });
     if (at == full_poses.end()) return std::nullopt;
     return at->pose;
   };
+  // Full-run SLAM places both halves in one frame: a second-half scan whose full-run pose is
+  // within 2 m and 90° of a first-half pose is in a mapped place (the share is printed).
+  auto mappedPlace = [&](int64_t utime) {
+    const std::optional<Pose2> here = fullPose(utime);
+    return here && std::any_of(full_poses.begin(), full_poses.end(), [&](const PoseStamped& q) {
+             return q.utime < split && (q.pose.translation() - here->translation()).norm() <= 2.0 &&
+                    std::abs(wrapAngle(q.pose.theta - here->theta)) <= M_PI / 2;
+           });
+  };
+  // A fix is judged against where the robot must be in the map: the mapping's last pose moved on by
+  // full-run SLAM's motion since (its relations are good to centimetres over such spans).
   const std::optional<Pose2> full_at_split = fullPose(result.mapped.back().utime);
   size_t in_mapped_places = 0, fixes_right = 0, fixes_wrong = 0;
   for (size_t k = 0; k < result.online.size(); ++k) {
