@@ -34,6 +34,8 @@ nlohmann::json localizationReportJson(const MapLocalizer& localizer, double seco
           {"matched_scans", s.matched_scans},
           {"odometry_only_scans", s.odometry_only_scans},
           {"match_failures", s.match_failures},
+          {"new_ground_scans", s.new_ground_scans},
+          {"off_map_timeouts", s.off_map_timeouts},
           {"gate_rejections", s.gate_rejections},
           {"odometry_faults", s.odometry_faults},
           {"global_searches", s.global_searches},

@@ -3,6 +3,7 @@
 #include "slam/psm_match.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
 #include <algorithm>
@@ -15,6 +16,11 @@ namespace {
 Vec3 poseDifference(const Pose2& a, const Pose2& b) { return {a.x - b.x, a.y - b.y, wrapAngle(a.theta - b.theta)}; }
 
 /// Whether `b` lies within `translation` and `rotation` of `a` (in a's frame).
+/// Standard deviation of the position along its most uncertain direction.
+double positionSigma(const Mat3& cov) {
+  return std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(cov.topLeftCorner<2, 2>()).eigenvalues().maxCoeff()));
+}
+
 bool near(const Pose2& a, const Pose2& b, double translation, double rotation) {
   const Pose2 apart = between(a, b);
   return apart.translation().norm() <= translation && std::abs(apart.theta) <= rotation;
@@ -119,7 +125,7 @@ bool MapLocalizer::applyFix(const Fix& fix) {
   return true;
 }
 
-bool MapLocalizer::track(const PreparedScan& scan, const Pose2& mount, MapLocalizationResult& result) {
+MapLocalizer::Tracked MapLocalizer::track(const PreparedScan& scan, const Pose2& mount, MapLocalizationResult& result) {
   std::vector<std::pair<double, size_t>> nearest;
   for (size_t i = 0; i < references_.size(); ++i) {
     const Pose2 relative = between(references_[i].pose, pose_);
@@ -141,13 +147,45 @@ bool MapLocalizer::track(const PreparedScan& scan, const Pose2& mount, MapLocali
       std::optional<Fix> fix = match(i, scan, mount, between(references_[i].pose, prior), false);
       if (fix && goodFix(*fix, false) && (!best || fix->error_index < best->error_index)) best = fix;
     }
-  if (!best) {
-    ++stats_.match_failures;
+  if (best && applyFix(*best)) {
+    result.matched = true;
+    result.reference = references_[best->reference].id;
+    unmatched_near_map_ = 0;
+    newLocalReference(scan, mount);
+    return Tracked::Matched;
+  }
+  unmatched_near_map_ = nearest.empty() ? 0 : unmatched_near_map_ + 1;
+  if (!nearest.empty()) ++stats_.match_failures;
+  return trackNewGround(scan, mount) ? Tracked::NewGround : Tracked::Failed;
+}
+
+void MapLocalizer::newLocalReference(const PreparedScan& scan, const Pose2& mount) {
+  local_reference_ = LocalReference{pose_, cov_, mount, scan};
+}
+
+// The scan does not match the map: new ground, or the robot is not where it is thought to be.
+// A match with the last scan that did (or with the last local reference) tells them apart: new
+// ground is continuous with what the robot saw a moment ago; a kidnapped robot's view is not.
+bool MapLocalizer::trackNewGround(const PreparedScan& scan, const Pose2& mount) {
+  if (!local_reference_) return false;
+  const LocalReference& ref = *local_reference_;
+  const std::optional<RobotFrameMatch> m =
+      matchInRobotFrame(matcher_, ref.scan, ref.laser_mount, scan, mount, between(ref.pose, pose_), params_, false);
+  if (!m || !(m->error_index <= params_.max_error_index) || m->overlap < params_.min_overlap) return false;
+  const Mat3 Ja = composeJacobianA(ref.pose, m->z), Jb = composeJacobianB(ref.pose);
+  const Pose2 matched = ref.pose * m->z;
+  const Mat3 match_cov = Jb * m->R * Jb.transpose();
+  const Vec3 nu = poseDifference(matched, pose_);
+  const bool gated = nu.dot((cov_ + match_cov).ldlt().solve(nu)) <= params_.chi2_gate;
+  if (!gated && !withinOdometryFault(pose_, matched) && !withinOdometryFault(constantVelocityPose(), matched)) {
+    ++stats_.gate_rejections;
     return false;
   }
-  if (!applyFix(*best)) return false;
-  result.matched = true;
-  result.reference = references_[best->reference].id;
+  pose_ = matched;
+  cov_ = Ja * ref.cov * Ja.transpose() + match_cov;
+  ++stats_.new_ground_scans;
+  if (!near(ref.pose, pose_, params_.keyframe_distance, params_.keyframe_angle) || m->overlap < params_.keyframe_min_overlap)
+    newLocalReference(scan, mount);
   return true;
 }
 
@@ -198,8 +236,41 @@ std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& r
 
 void MapLocalizer::lose() {
   localized_ = false;
+  failures_in_a_row_ = unmatched_near_map_ = 0;
   hypothesis_.reset();
+  last_search_at_.reset();
   ++stats_.losses;
+}
+
+bool MapLocalizer::searchDue(const Pose2& predicted) const {
+  return !last_search_at_ ||
+         !near(*last_search_at_, predicted, options_.global_search_spacing, options_.global_search_turn);
+}
+
+void MapLocalizer::searchAndConfirm(const LaserScan& raw, const PreparedScan& scan, const Pose2& predicted,
+                                    MapLocalizationResult& result) {
+  last_search_at_ = predicted;
+  const std::optional<Fix> hit = searchGlobally(raw, scan);
+  if (!hit) {
+    hypothesis_.reset();
+    return;
+  }
+  const bool confirmed = hypothesis_ && near(hypothesis_->pose * between(hypothesis_->odometry_pose, predicted),
+                                             hit->pose, options_.confirm_translation, options_.confirm_rotation);
+  if (!confirmed) {
+    if (hypothesis_) ++stats_.global_unconfirmed;
+    hypothesis_ = Hypothesis{hit->pose, predicted};
+    return;
+  }
+  pose_ = hit->pose;
+  cov_ = hit->cov;
+  localized_ = true;
+  failures_in_a_row_ = 0;
+  hypothesis_.reset();
+  result.found = result.matched = true;
+  result.reference = references_[hit->reference].id;
+  ++stats_.fixes;
+  if (stats_.first_fix_scan < 0) stats_.first_fix_scan = static_cast<int64_t>(stats_.scans - 1);
 }
 
 MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
@@ -212,34 +283,20 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
     ++stats_.unusable_scans;
   } else if (localized_) {
     result.usable = true;
-    failures_in_a_row_ = track(*prepared, scan.laser_pose, result) ? 0 : failures_in_a_row_ + 1;
-    if (failures_in_a_row_ >= options_.lost_after_scans) {
+    const Tracked tracked = track(*prepared, scan.laser_pose, result);
+    failures_in_a_row_ = tracked == Tracked::Failed ? failures_in_a_row_ + 1 : 0;
+    if (failures_in_a_row_ >= options_.lost_after_scans || unmatched_near_map_ >= options_.lost_near_map_after_scans) {
+      // The scans of the failed run (placed by odometry or the local reference): re-placed with the rest.
+      const size_t failed = static_cast<size_t>(std::max(failures_in_a_row_, unmatched_near_map_)) - 1;
       lose();
-      // The scans of the failed run had odometry-only poses already: re-placed with the rest.
-      const size_t failed = static_cast<size_t>(options_.lost_after_scans) - 1;
       lost_since_ = online_.size() >= failed ? online_.size() - failed : 0;
+    } else if (tracked == Tracked::NewGround && positionSigma(cov_) > options_.max_off_map_sigma) {
+      ++stats_.off_map_timeouts;
+      lose();  // the poses so far still hold what odometry knew; from here on they are re-placed
     }
   } else {
     result.usable = true;
-    std::optional<Fix> hit = searchGlobally(scan, *prepared);
-    if (hit) {
-      const bool confirmed =
-          hypothesis_ && near(hypothesis_->pose * between(hypothesis_->odometry_pose, predicted), hit->pose,
-                              options_.confirm_translation, options_.confirm_rotation);
-      if (confirmed) {
-        pose_ = hit->pose;
-        cov_ = hit->cov;
-        localized_ = true;
-        failures_in_a_row_ = 0;
-        result.found = result.matched = true;
-        result.reference = references_[hit->reference].id;
-        ++stats_.fixes;
-        if (stats_.first_fix_scan < 0) stats_.first_fix_scan = static_cast<int64_t>(stats_.scans - 1);
-      } else {
-        if (hypothesis_) ++stats_.global_unconfirmed;
-        hypothesis_ = Hypothesis{hit->pose, predicted};
-      }
-    }
+    if (searchDue(predicted)) searchAndConfirm(scan, *prepared, predicted, result);
   }
   dead_reckoning_.push_back(predicted);
   last_scan_motion_ = result.found ? Pose2() : between(last_scan_pose_, pose_);  // a fix is not a motion

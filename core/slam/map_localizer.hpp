@@ -4,9 +4,19 @@
 // model as PSM SLAM's filter), matched by PSM against the nearest reference scans, and updated
 // with the best good match that passes the χ² gate: a 3-state EKF whose map is known.
 //
+// New ground. A scan that matches no reference scan of the map is matched with the last scan
+// that did (a local reference, renewed as the robot moves on, never added to the map): on
+// ground the map does not hold the pose goes on by scan matching, its covariance growing, and
+// tracking picks the map up again when the robot comes back. Only a scan that matches neither
+// counts towards being lost: a kidnapped robot's view does not continue the one before. New
+// ground does not lie where the map's reference scans are: `lost_near_map_after_scans` scans in a
+// row near them without a match with the map also lose the robot (carried along a look-alike
+// corridor, its view may continue the one before).
+//
 // Global localisation. When the start is unknown, or the robot has been lost for
-// `lost_after_scans` scans in a row (kidnapped, or the odometry failed), every scan is matched
-// against the reference scans from several headings each (PSM converges from ±45° of heading
+// `lost_after_scans` scans in a row (kidnapped, or the odometry failed), the scan is matched
+// against the reference scans from several headings each, again each time the robot has moved
+// on by `global_search_spacing` or turned by `global_search_turn` (PSM converges from ±45° of heading
 // and from within about half the reference spacing). A hit is taken only when no other place
 // fits about as well (the loop-closure ambiguity rule) and the next search agrees with it after
 // the odometry in between: a look-alike corridor gives no hit rather than a wrong one. Until then
@@ -52,6 +62,8 @@ struct MapLocalizerStats {
   size_t matched_scans = 0;        ///< tracking: a match updated the pose
   size_t odometry_only_scans = 0;  ///< not localized: pose from odometry alone
   size_t match_failures = 0;       ///< tracking: no good match with any candidate
+  size_t new_ground_scans = 0;     ///< tracking: no map match, placed by the local reference
+  size_t off_map_timeouts = 0;     ///< on new ground until the pose was too uncertain: lost
   size_t gate_rejections = 0;      ///< tracking: good matches outside the χ² gate
   size_t odometry_faults = 0;      ///< tracking: gated-out matches taken as odometry faults
   size_t global_searches = 0;
@@ -103,6 +115,14 @@ class MapLocalizer {
     double overlap = 0.0;
     double fit = 0.0;     ///< of the whole scan to the map at `pose` (global search)
   };
+  /// The last scan tied to the map (or to such a scan), at its pose and covariance: new ground
+  /// is tracked against it.
+  struct LocalReference {
+    Pose2 pose;
+    Mat3 cov = Mat3::Zero();
+    Pose2 laser_mount;
+    PreparedScan scan;
+  };
   struct Hypothesis {
     Pose2 pose;           ///< the hit's robot pose
     Pose2 odometry_pose;  ///< the dead-reckoning pose at that scan
@@ -116,8 +136,16 @@ class MapLocalizer {
   std::optional<Fix> match(size_t reference, const PreparedScan& scan, const Pose2& mount, const Pose2& relative_guess,
                            bool wide);
   bool goodFix(const Fix& fix, bool global) const;
-  /// Tracking: matches the nearest references and applies the best good match. True if applied.
-  bool track(const PreparedScan& scan, const Pose2& mount, MapLocalizationResult& result);
+  enum class Tracked { Matched, NewGround, Failed };
+  /// Tracking: matches the nearest references and applies the best good match; else new ground.
+  Tracked track(const PreparedScan& scan, const Pose2& mount, MapLocalizationResult& result);
+  /// Places the scan by a match with the local reference. True if applied.
+  bool trackNewGround(const PreparedScan& scan, const Pose2& mount);
+  void newLocalReference(const PreparedScan& scan, const Pose2& mount);
+  /// While lost: whether the robot has moved on enough since the last search that found nothing.
+  bool searchDue(const Pose2& predicted) const;
+  void searchAndConfirm(const LaserScan& raw, const PreparedScan& scan, const Pose2& predicted,
+                        MapLocalizationResult& result);
   bool applyFix(const Fix& fix);
   /// Where the robot would be had it kept the motion between the last two scans (real odometry
   /// goes stale and catches up in one jump; PSM SLAM matches from this prior too).
@@ -144,7 +172,10 @@ class MapLocalizer {
   Mat3 cov_ = Mat3::Zero();
   bool localized_ = false;
   int failures_in_a_row_ = 0;
+  int unmatched_near_map_ = 0;  ///< scans in a row with reference scans near but no map match
   std::optional<Hypothesis> hypothesis_;
+  std::optional<LocalReference> local_reference_;
+  std::optional<Pose2> last_search_at_;  ///< dead-reckoning pose of the last global search
   std::optional<size_t> lost_since_;  ///< first scan of the current odometry-only stretch
 
   std::vector<PoseStamped> online_;

@@ -111,6 +111,11 @@ void describeLocalization(ParameterTable& t, MapLocalizationParams& p) {
   t.angle("track_heading_deg", p.track_heading, 0.0, 180.0, "the same for heading");
   t.integer("track_candidates", p.track_candidates, 1, 100, "tracking matches per scan at most");
   t.integer("lost_after_scans", p.lost_after_scans, 1, 100000, "scans without a match: lost, search globally");
+  t.integer("lost_near_map_after_scans", p.lost_near_map_after_scans, 1, 100000,
+            "scans near reference scans without a map match: lost");
+  t.number("max_off_map_sigma", p.max_off_map_sigma, 0.0, 1000.0, "m: on new ground, lost beyond this position sigma");
+  t.number("global_search_spacing", p.global_search_spacing, 0.0, 1000.0, "m: while lost, search again after moving this far");
+  t.angle("global_search_turn_deg", p.global_search_turn, 0.0, 360.0, "... or turning this much");
   t.integer("global_headings", p.global_headings, 1, 360, "headings tried per reference scan in a global search");
   t.number("global_min_overlap", p.global_min_overlap, 0.0, 1.0, "associated fraction of a global hit at least");
   t.number("global_fit_distance", p.global_fit_distance, 0.001, 10.0, "m: a reading this close to the map fits");

@@ -17,9 +17,21 @@ struct MapLocalizationParams {
   double track_radius = 2.0;             ///< m
   double track_heading = deg2rad(90.0);
   int track_candidates = 2;
-  /// This many scans in a row without an applied match: the robot is lost (kidnapped, or its
-  /// odometry failed) and the global search takes over.
+  /// This many scans in a row that match neither the map nor the local reference (new ground,
+  /// map_localizer.hpp): the robot is lost (kidnapped, or its odometry failed) and the global
+  /// search takes over.
   int lost_after_scans = 5;
+  /// This many scans in a row with reference scans within track_radius but no match with the map
+  /// (even if new-ground tracking placed them): lost too.
+  int lost_near_map_after_scans = 15;
+  /// On new ground, the robot is lost once its position's standard deviation exceeds this:
+  /// tracking could not pick the map up from so vague a pose.
+  double max_off_map_sigma = 1.0;        ///< m
+  /// While lost, a search is repeated only once the robot has moved this far or turned this much:
+  /// the same view gives the same answer, every search matches every reference scan, and a hit is
+  /// confirmed only by a search from another viewpoint.
+  double global_search_spacing = 0.25;   ///< m
+  double global_search_turn = deg2rad(15.0);
   /// Global search: each reference scan is matched from this many headings spread over the full
   /// circle (PSM's first orientation step searches ±loop_search_window around each).
   int global_headings = 6;

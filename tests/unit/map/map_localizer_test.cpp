@@ -128,7 +128,7 @@ TEST(MapLocalizer, AKnownStartTracksFromTheFirstScanWithoutSearching) {
 }
 
 // 20 seeds: the robot is carried 4-12 m along the loop mid-run while its odometry notices nothing.
-// The localiser notices (along a look-alike corridor it may take a few dozen scans), flags its
+// The localiser notices (along a look-alike corridor it may take about a hundred scans), flags its
 // poses as odometry only, and no fix, ever,
 // is more than 0.3 m from the truth (no wrong lock-on). How soon it is found again is printed
 // (issue 15's goal, within 20 scans, is not met on every seed yet).
@@ -159,6 +159,9 @@ TEST(MapLocalizer, AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace) {
       }
     }
     ASSERT_TRUE(noticed) << "seed " << seed << ": the kidnap at scan " << kidnap << " went unnoticed";
+    std::printf("seed %2llu: carried %.1f m, noticed after %zu scans, found again after %lld\n",
+                static_cast<unsigned long long>(seed), distance(path[kidnap - 1], path[kidnap + carried]), *noticed - kidnap,
+                found_again ? static_cast<long long>(*found_again - kidnap) : -1LL);
     latest_notice = std::max(latest_notice, *noticed - kidnap);
     if (found_again && *found_again - kidnap <= 20) ++found_within_20;
   }
