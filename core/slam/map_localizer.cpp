@@ -239,6 +239,7 @@ void MapLocalizer::lose() {
   failures_in_a_row_ = unmatched_near_map_ = 0;
   hypothesis_.reset();
   last_search_at_.reset();
+  local_reference_.reset();  // seen from where the robot may no longer be
   ++stats_.losses;
 }
 
