@@ -15,12 +15,12 @@ namespace {
 
 Vec3 poseDifference(const Pose2& a, const Pose2& b) { return {a.x - b.x, a.y - b.y, wrapAngle(a.theta - b.theta)}; }
 
-/// Whether `b` lies within `translation` and `rotation` of `a` (in a's frame).
 /// Standard deviation of the position along its most uncertain direction.
 double positionSigma(const Mat3& cov) {
   return std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(cov.topLeftCorner<2, 2>()).eigenvalues().maxCoeff()));
 }
 
+/// Whether `b` lies within `translation` and `rotation` of `a` (in a's frame).
 bool near(const Pose2& a, const Pose2& b, double translation, double rotation) {
   const Pose2 apart = between(a, b);
   return apart.translation().norm() <= translation && std::abs(apart.theta) <= rotation;
@@ -98,16 +98,22 @@ bool MapLocalizer::goodFix(const Fix& fix, bool global) const {
          fix.cov.allFinite();
 }
 
-bool MapLocalizer::withinOdometryFault(const Pose2& from, const Pose2& to) const {
-  return near(from, to, params_.max_odometry_fault_translation, params_.max_odometry_fault_rotation);
+bool MapLocalizer::odometryFaultExplains(const Pose2& measured) const {
+  auto within = [&](const Pose2& from) {
+    return near(from, measured, params_.max_odometry_fault_translation, params_.max_odometry_fault_rotation);
+  };
+  return within(pose_) || within(constantVelocityPose());
+}
+
+bool MapLocalizer::withinGate(const Vec3& innovation, const Mat3& innovation_cov) const {
+  return innovation.dot(innovation_cov.ldlt().solve(innovation)) <= params_.chi2_gate;
 }
 
 bool MapLocalizer::applyFix(const Fix& fix) {
-  Vec3 nu = poseDifference(fix.pose, pose_);
+  const Vec3 nu = poseDifference(fix.pose, pose_);
   Mat3 S = cov_ + fix.cov;
-  double chi2 = nu.dot(S.ldlt().solve(nu));
-  if (!(chi2 <= params_.chi2_gate)) {
-    if (!withinOdometryFault(pose_, fix.pose) && !withinOdometryFault(constantVelocityPose(), fix.pose)) {
+  if (!withinGate(nu, S)) {
+    if (!odometryFaultExplains(fix.pose)) {
       ++stats_.gate_rejections;
       return false;
     }
@@ -155,7 +161,7 @@ MapLocalizer::Tracked MapLocalizer::track(const PreparedScan& scan, const Pose2&
     return Tracked::Matched;
   }
   unmatched_near_map_ = nearest.empty() ? 0 : unmatched_near_map_ + 1;
-  if (!nearest.empty()) ++stats_.match_failures;
+  if (!best) ++stats_.match_failures;
   return trackNewGround(scan, mount) ? Tracked::NewGround : Tracked::Failed;
 }
 
@@ -171,18 +177,20 @@ bool MapLocalizer::trackNewGround(const PreparedScan& scan, const Pose2& mount) 
   const LocalReference& ref = *local_reference_;
   const std::optional<RobotFrameMatch> m =
       matchInRobotFrame(matcher_, ref.scan, ref.laser_mount, scan, mount, between(ref.pose, pose_), params_, false);
-  if (!m || !(m->error_index <= params_.max_error_index) || m->overlap < params_.min_overlap) return false;
+  if (!m) return false;
   const Mat3 Ja = composeJacobianA(ref.pose, m->z), Jb = composeJacobianB(ref.pose);
-  const Pose2 matched = ref.pose * m->z;
-  const Mat3 match_cov = Jb * m->R * Jb.transpose();
-  const Vec3 nu = poseDifference(matched, pose_);
-  const bool gated = nu.dot((cov_ + match_cov).ldlt().solve(nu)) <= params_.chi2_gate;
-  if (!gated && !withinOdometryFault(pose_, matched) && !withinOdometryFault(constantVelocityPose(), matched)) {
+  Fix fix;
+  fix.pose = ref.pose * m->z;
+  fix.cov = Jb * m->R * Jb.transpose();
+  fix.error_index = m->error_index;
+  fix.overlap = m->overlap;
+  if (!goodFix(fix, false)) return false;
+  if (!withinGate(poseDifference(fix.pose, pose_), cov_ + fix.cov) && !odometryFaultExplains(fix.pose)) {
     ++stats_.gate_rejections;
     return false;
   }
-  pose_ = matched;
-  cov_ = Ja * ref.cov * Ja.transpose() + match_cov;
+  pose_ = fix.pose;
+  cov_ = Ja * ref.cov * Ja.transpose() + fix.cov;
   ++stats_.new_ground_scans;
   if (!near(ref.pose, pose_, params_.keyframe_distance, params_.keyframe_angle) || m->overlap < params_.keyframe_min_overlap)
     newLocalReference(scan, mount);

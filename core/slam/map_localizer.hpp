@@ -142,7 +142,7 @@ class MapLocalizer {
   /// Places the scan by a match with the local reference. True if applied.
   bool trackNewGround(const PreparedScan& scan, const Pose2& mount);
   void newLocalReference(const PreparedScan& scan, const Pose2& mount);
-  /// While lost: whether the robot has moved on enough since the last search that found nothing.
+  /// While lost: whether the robot has moved on enough since the last global search.
   bool searchDue(const Pose2& predicted) const;
   void searchAndConfirm(const LaserScan& raw, const PreparedScan& scan, const Pose2& predicted,
                         MapLocalizationResult& result);
@@ -150,7 +150,10 @@ class MapLocalizer {
   /// Where the robot would be had it kept the motion between the last two scans (real odometry
   /// goes stale and catches up in one jump; PSM SLAM matches from this prior too).
   Pose2 constantVelocityPose() const { return last_scan_pose_ * last_scan_motion_; }
-  bool withinOdometryFault(const Pose2& from, const Pose2& to) const;
+  /// Whether a measured pose is within an odometry fault of the prediction or of the previous
+  /// motion kept up (a good match just outside the gate is then taken, not rejected).
+  bool odometryFaultExplains(const Pose2& measured) const;
+  bool withinGate(const Vec3& innovation, const Mat3& innovation_cov) const;
   /// Global search: the unambiguous best hit of this scan, if any.
   std::optional<Fix> searchGlobally(const LaserScan& raw, const PreparedScan& scan);
   void lose();
