@@ -1,5 +1,6 @@
 #include "pipeline/map_localization_estimator.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 #include "grid/grid_files.hpp"
@@ -11,19 +12,87 @@ namespace polarslam {
 MapLocalizationEstimator::MapLocalizationEstimator(StoredMap map, PsmSlamEstimatorConfig config,
                                                    std::optional<Pose2> initial_pose, const Mat3& initial_cov)
     : map_(std::move(map)), config_(std::move(config)), localizer_(mapReferences(map_), config_.slam) {
-  if (initial_pose) localizer_.setInitialPose(*initial_pose, initial_cov);
+  if (!initial_pose) return;
+  if (config_.slam.localization.temporary_mapping) startTracking(*initial_pose, initial_cov);
+  else localizer_.setInitialPose(*initial_pose, initial_cov);
 }
 
 void MapLocalizationEstimator::onOdometry(const OdometryReading& odometry) {
   const auto start = std::chrono::steady_clock::now();
-  localizer_.addOdometry(odometry);
+  last_odometry_ = odometry;
+  localizer_.addOdometry(odometry);  // the search takes over from the latest reading when tracking is lost
+  if (tracker_) tracker_->onOdometry(odometry);
   seconds_ += secondsSince(start);
 }
 
 void MapLocalizationEstimator::onLaser(const LaserScan& scan) {
   const auto start = std::chrono::steady_clock::now();
-  last_result_ = localizer_.addScan(scan);
+  if (tracker_) track(scan);
+  else search(scan);
+  online_.push_back(last_result_.pose);
+  localized_flags_.push_back(last_result_.localized);
   seconds_ += secondsSince(start);
+}
+
+void MapLocalizationEstimator::startTracking(const Pose2& pose, const Mat3& cov) {
+  tracker_ = std::make_unique<PsmSlamEstimator>(config_);
+  tracker_->localizeIn(map_, pose, cov);
+  if (last_odometry_) tracker_->onOdometry(*last_odometry_);  // its integrator starts from the latest reading
+  untied_in_a_row_ = 0;
+  scans_since_tied_ = 0;
+  ++tracked_stretches_;
+}
+
+void MapLocalizationEstimator::search(const LaserScan& scan) {
+  last_result_ = localizer_.addScan(scan);
+  if (!config_.slam.localization.temporary_mapping || !last_result_.found) return;
+  // The search stretch (and the untied scans before it) re-placed from the fix, as dead reckoning.
+  const std::vector<PoseStamped> searched = localizer_.trajectory();
+  const Pose2 fix_from_dead_reckoning = searched.back().pose * localizer_.deadReckoning().back().inverse();
+  for (PoseStamped p : untied_tail_) {
+    p.pose = fix_from_dead_reckoning * p.pose;
+    placed_.push_back(p);
+  }
+  untied_tail_.clear();
+  placed_.insert(placed_.end(), searched.begin() + static_cast<long>(search_start_), searched.end());
+  startTracking(last_result_.pose.pose, last_result_.pose.cov);
+}
+
+void MapLocalizationEstimator::track(const LaserScan& scan) {
+  tracker_->onLaser(scan);
+  const PsmSlamScanResult& r = tracker_->lastResult();
+  last_result_ = MapLocalizationResult{};
+  last_result_.pose = tracker_->onlineTrajectory().back();
+  last_result_.usable = r.usable;
+  last_result_.localized = true;
+  last_result_.matched = r.tied;
+  scans_since_tied_ = r.tied ? 0 : scans_since_tied_ + 1;
+  // Untied on new ground is where a robot that lost its match (a fast turn) and went on beyond
+  // the map would be too: only untied scans where the map's reference scans should be seen count.
+  if (r.tied) untied_in_a_row_ = 0;
+  else if (r.usable && nearMap(last_result_.pose.pose)) ++untied_in_a_row_;
+  if (untied_in_a_row_ >= config_.slam.localization.lost_near_map_after_scans) loseTracking(scan.utime);
+}
+
+bool MapLocalizationEstimator::nearMap(const Pose2& pose) const {
+  const MapLocalizationParams& p = config_.slam.localization;
+  return std::any_of(map_.graph.nodes().begin(), map_.graph.nodes().end(), [&](const PoseGraphNode& node) {
+    const Pose2 apart = between(node.pose, pose);
+    return apart.translation().norm() <= p.track_radius && std::abs(apart.theta) <= p.track_heading;
+  });
+}
+
+void MapLocalizationEstimator::loseTracking(int64_t utime) {
+  const std::vector<PoseStamped> tracked = tracker_->slam().trajectory();
+  const size_t tail = std::min(scans_since_tied_, tracked.size());
+  placed_.insert(placed_.end(), tracked.begin(), tracked.end() - static_cast<long>(tail));
+  untied_tail_.assign(tracked.end() - static_cast<long>(tail), tracked.end());
+  temporary_reference_scans_ += tracker_->slam().graph().nodes().size() - static_cast<size_t>(tracker_->slam().mapKeyframes());
+  localizer_.searchFrom(tracked.back().pose, utime);
+  search_start_ = localizer_.onlineTrajectory().size();
+  tracker_.reset();
+  last_result_.localized = false;
+  ++tracking_losses_;
 }
 
 nlohmann::json localizationReportJson(const MapLocalizer& localizer, double seconds) {
@@ -52,9 +121,34 @@ nlohmann::json localizationReportJson(const MapLocalizer& localizer, double seco
 }
 
 void MapLocalizationEstimator::finish(const std::string& out_dir, nlohmann::json& report) {
-  final_ = localizer_.trajectory();
+  const bool tracking = tracker_ != nullptr;
+  if (tracker_) {
+    nlohmann::json tracked;
+    tracker_->finish("", tracked);  // the final optimisation of the tracked stretch
+    report["psm_slam"] = tracked["psm_slam"];
+    const std::vector<PoseStamped>& poses = tracker_->trajectory();
+    placed_.insert(placed_.end(), poses.begin(), poses.end());
+    temporary_reference_scans_ += tracker_->slam().graph().nodes().size() - static_cast<size_t>(tracker_->slam().mapKeyframes());
+  } else {
+    // Never found again: the untied scans and the search stay dead reckoning.
+    placed_.insert(placed_.end(), untied_tail_.begin(), untied_tail_.end());
+    const std::vector<PoseStamped> searched = localizer_.trajectory();
+    placed_.insert(placed_.end(), searched.begin() + static_cast<long>(search_start_), searched.end());
+  }
+  final_ = std::move(placed_);
   finished_ = true;
-  report["localization"] = localizationReportJson(localizer_, seconds_);
+  nlohmann::json section = localizationReportJson(localizer_, seconds_);
+  section["localized_at_end"] = localized();
+  section["temporary_mapping"] = config_.slam.localization.temporary_mapping;
+  if (config_.slam.localization.temporary_mapping) {
+    section["scans"] = online_.size();
+    section["searched_scans"] = localizer_.stats().scans;
+    section["tracked_stretches"] = tracked_stretches_;
+    section["tracking_losses"] = tracking_losses_;
+    section["temporary_reference_scans"] = temporary_reference_scans_;
+    section["tracking_at_end"] = tracking;
+  }
+  report["localization"] = section;
   if (out_dir.empty() || map_.scans.empty()) return;
   GraphScanStore store;
   for (const MapReferenceScan& s : map_.scans) store.add(s.scan, s.anchor);

@@ -1,8 +1,24 @@
 #pragma once
-// `polarslam run --pipeline psm-slam --load-map M --mode localize`: localisation in a stored map
-// (core/slam/map_localizer.hpp), the map unchanged. Online trajectory: the poses at scan time
-// (odometry only until the first fix); final trajectory: the odometry-only stretches re-placed
-// from the fix that ended them. The map's grid is drawn again with the localised trajectory.
+// `polarslam run --pipeline psm-slam --load-map M --mode localize`: localisation in a stored map,
+// the map unchanged (docs/maps.md).
+//
+// Until the robot is placed in the map (the --initial-pose, or a fix of the global search,
+// core/slam/map_localizer.hpp) its poses are odometry only. Once placed, PSM SLAM tracks it over
+// the map held fixed (PsmSlamEstimator::localizeIn): matches with the map's reference scans tie
+// it to the map, and on ground the map does not hold it maps on with temporary reference scans
+// of its own, closing loops with them and with the map, so a robot that leaves the map comes
+// back to it consistent (Cartographer's pure localisation does the same). `lost_after_scans`
+// scans in a row that match no reference scan tied to the map (PsmSlamScanResult::tied: a
+// kidnapped robot maps the new place untied) lose it: the temporary reference scans are dropped
+// and the global search takes over again, from the first of those scans.
+//
+// Online trajectory: the poses at scan time. Final trajectory: each tracked stretch as its PSM
+// SLAM graph places it after a final optimisation, each searched stretch (with the untied scans
+// before it) re-placed from the fix that ended it. The map's grid is drawn again with the
+// localised trajectory.
+//
+// With localization.temporary_mapping off, MapLocalizer tracks too: the map's reference scans
+// only, and a single local reference on new ground.
 #include <memory>
 #include <optional>
 #include <string>
@@ -27,22 +43,45 @@ class MapLocalizationEstimator : public Estimator {
   std::string name() const override { return "psm-localize"; }
   void onOdometry(const OdometryReading& odometry) override;
   void onLaser(const LaserScan& scan) override;
-  const std::vector<PoseStamped>& trajectory() const override { return finished_ ? final_ : localizer_.onlineTrajectory(); }
-  const std::vector<PoseStamped>& onlineTrajectory() const override { return localizer_.onlineTrajectory(); }
-  /// Adds the "localization" figures and writes map.png with the trajectory into `out_dir`.
+  const std::vector<PoseStamped>& trajectory() const override { return finished_ ? final_ : online_; }
+  const std::vector<PoseStamped>& onlineTrajectory() const override { return online_; }
+  /// Adds the "localization" figures (and "psm_slam" of the last tracked stretch) and writes
+  /// map.png with the trajectory into `out_dir`.
   void finish(const std::string& out_dir, nlohmann::json& report) override;
 
   const MapLocalizer& localizer() const { return localizer_; }
   const StoredMap& map() const { return map_; }
+  /// Whether the robot is placed in the map now.
+  bool localized() const { return tracker_ ? true : localizer_.localized(); }
+  /// Per scan: whether its online pose was tied to the map (placed in it).
+  const std::vector<bool>& localizedFlags() const { return localized_flags_; }
   /// What the latest scan gave.
   const MapLocalizationResult& lastResult() const { return last_result_; }
   double seconds() const { return seconds_; }
 
  private:
+  void startTracking(const Pose2& pose, const Mat3& cov);
+  void track(const LaserScan& scan);
+  void search(const LaserScan& scan);
+  /// Untied for too long: back to the global search from the first untied scan's pose.
+  void loseTracking(int64_t utime);
+  /// A reference scan of the map lies within track_radius and track_heading of `pose`.
+  bool nearMap(const Pose2& pose) const;
+
   StoredMap map_;
   PsmSlamEstimatorConfig config_;
   MapLocalizer localizer_;
-  std::vector<PoseStamped> final_;
+  std::unique_ptr<PsmSlamEstimator> tracker_;  ///< placed in the map (temporary mapping)
+  std::optional<OdometryReading> last_odometry_;
+  int untied_in_a_row_ = 0;               ///< usable scans near the map
+  size_t scans_since_tied_ = 0;            ///< all scans
+  size_t tracking_losses_ = 0, tracked_stretches_ = 0, temporary_reference_scans_ = 0;
+  nlohmann::json last_tracking_report_;
+  size_t search_start_ = 0;                ///< the localiser's first scan of the current search
+  std::vector<PoseStamped> untied_tail_;   ///< the untied scans that ended tracking, before the search
+  std::vector<PoseStamped> placed_;        ///< final poses of the stretches that have ended
+  std::vector<PoseStamped> online_, final_;
+  std::vector<bool> localized_flags_;
   bool finished_ = false;
   double seconds_ = 0.0;
   MapLocalizationResult last_result_;

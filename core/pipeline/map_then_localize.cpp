@@ -28,10 +28,14 @@ MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, in
 
   const auto start = std::chrono::steady_clock::now();
   std::optional<Pose2> known_start;
-  Mat3 start_cov = Mat3::Zero();  // the mapping's own uncertainty where it ended
+  // The mapping's uncertainty where it ended, relative to its reference scan there: the map's
+  // poses are the frame now, so its absolute uncertainty (a metre after a long run without a
+  // loop) is not the robot's uncertainty in it.
+  Mat3 start_cov = Mat3::Zero();
   if (options.known_start && !result.mapped.empty()) {
     known_start = result.mapped.back().pose;
-    start_cov = mapping.onlineTrajectory().back().cov;
+    const int64_t active = mapping.slam().filter().activeKeyframe();
+    if (active >= 0) start_cov = mapping.slam().uncertaintyFromRobot(active);
   }
   std::unique_ptr<Estimator> second;
   const MapLocalizationEstimator* localization = nullptr;
@@ -65,7 +69,7 @@ MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, in
   result.online = second->onlineTrajectory();
   const nlohmann::json& search = result.report["localization"];
   if (localization) {
-    result.tied_to_map = localization->localizer().localizedFlags();
+    result.tied_to_map = localization->localizedFlags();
     result.stats = localization->localizer().stats();
     result.first_fix_scan = result.stats.first_fix_scan;
   } else {

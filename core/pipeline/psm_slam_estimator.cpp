@@ -100,6 +100,13 @@ void PsmSlamEstimator::onLaser(const LaserScan& laser) {
   map_scans_.add(scan, last_result_.anchor);
 }
 
+void PsmSlamEstimator::localizeIn(const StoredMap& map, const Pose2& start, const Mat3& start_cov) {
+  StoredMap known = map;
+  known.node_covariances.clear();  // the map's poses are the frame: known, not estimated
+  continueMap(known, start, start_cov);
+  slam_.freezeMap();
+}
+
 void PsmSlamEstimator::continueMap(const StoredMap& map, const Pose2& start, const Mat3& start_cov,
                                    const std::optional<PsmSlamFilterSeed>& seed) {
   std::vector<LaserScan> references(map.graph.nodes().size());

@@ -71,6 +71,9 @@ class PsmSlamEstimator : public Estimator {
   /// in its frame, and stay in the grid and in a saved map (PsmSlam::continueMap).
   void continueMap(const StoredMap& map, const Pose2& start, const Mat3& start_cov,
                    const std::optional<PsmSlamFilterSeed>& seed = std::nullopt);
+  /// Localises in `map` instead (before any message): the same, but the map's poses are held
+  /// where it has them (PsmSlam::freezeMap) and this run's reference scans are temporary.
+  void localizeIn(const StoredMap& map, const Pose2& start, const Mat3& start_cov);
   /// Where finish() saves the map (core/map/map_store.hpp); empty: nowhere.
   void saveMapTo(std::string dir) { save_map_dir_ = std::move(dir); }
   /// The map of everything so far (graph as it is now), with the effective parameters.

@@ -118,9 +118,8 @@ void PsmSlamSession::writeSnapshot(const std::string& dir, nlohmann::json resume
   if (last_odometry_) resume["last_odometry"] = odometryJson(*last_odometry_);
   if (localization_) {
     // Localising: the map is unchanged; the pose resumes tracking, or the search goes on.
-    const MapLocalizer& localizer = localization_->localizer();
     resume["mode"] = "localize";
-    if (localizer.localized()) {
+    if (localization_->localized()) {
       const PoseStamped& pose = localization_->lastResult().pose;
       resume["pose"] = poseJson(pose.pose);
       resume["covariance"] = std::vector<double>(pose.cov.data(), pose.cov.data() + 9);

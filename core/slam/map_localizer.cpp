@@ -251,6 +251,16 @@ void MapLocalizer::lose() {
   ++stats_.losses;
 }
 
+void MapLocalizer::searchFrom(const Pose2& pose, int64_t utime) {
+  lose();
+  pose_ = last_scan_pose_ = pose;
+  last_scan_motion_ = Pose2();
+  cov_.setZero();
+  pending_motion_ = Pose2();
+  pending_cov_.setZero();
+  last_utime_ = utime;
+}
+
 bool MapLocalizer::searchDue(const Pose2& predicted) const {
   return !last_search_at_ ||
          !near(*last_search_at_, predicted, options_.global_search_spacing, options_.global_search_turn);

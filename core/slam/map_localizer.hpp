@@ -84,6 +84,10 @@ class MapLocalizer {
 
   /// A known start: tracking begins at `pose` (map frame) with covariance `cov`.
   void setInitialPose(const Pose2& pose, const Mat3& cov);
+  /// The robot is lost at `pose` (dead reckoning from here on; time `utime`): the global search
+  /// takes over. Used when something else tracked it meanwhile (map_localization_estimator.hpp);
+  /// the odometry received since its last scan is dropped, the motion up to `pose` is in it.
+  void searchFrom(const Pose2& pose, int64_t utime);
   /// Cumulative odometry; bad readings are counted by the integrator and ignored.
   void addOdometry(const OdometryReading& reading);
   /// One laser scan; never throws for bad content.
@@ -93,6 +97,8 @@ class MapLocalizer {
   const std::vector<PoseStamped>& onlineTrajectory() const { return online_; }
   /// One pose per scan, the odometry-only stretches re-placed from the fix that ended them.
   std::vector<PoseStamped> trajectory() const;
+  /// Per scan: the dead-reckoning pose (before any match), in the frame of the poses around it.
+  const std::vector<Pose2>& deadReckoning() const { return dead_reckoning_; }
   /// Per scan: whether its online pose was tied to the map.
   const std::vector<bool>& localizedFlags() const { return localized_flags_; }
   const MapLocalizerStats& stats() const { return stats_; }

@@ -101,7 +101,8 @@ SolveResult solveOnce(PoseGraph& graph, const PoseGraphOptimizerOptions& options
   }
   const std::vector<size_t> roots = componentRoots(graph);
   for (size_t i = 0; i < nodes.size(); ++i)
-    if (roots[i] == i && problem.HasParameterBlock(&parameters[3 * i])) problem.SetParameterBlockConstant(&parameters[3 * i]);
+    if ((roots[i] == i || nodes[i].id < options.fixed_below) && problem.HasParameterBlock(&parameters[3 * i]))
+      problem.SetParameterBlockConstant(&parameters[3 * i]);
 
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;

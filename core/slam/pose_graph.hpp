@@ -89,6 +89,8 @@ struct PoseGraphOptimizerOptions {
   int max_outlier_rounds = 3;
   /// Relative cost change at which Ceres stops.
   double function_tolerance = 1e-8;
+  /// Nodes with ids below this are held where they are too (a stored map localised in).
+  int64_t fixed_below = 0;
 };
 
 struct PoseGraphOptimizationSummary {

@@ -92,6 +92,10 @@ struct PsmSlamScanResult {
   bool new_keyframe = false;
   bool loop_closed = false;
   bool optimized = false;
+  /// The scan matched a reference scan tied to the map: one of the map's, the run's first, or one
+  /// placed by such a match. A scan that matches only reference scans placed by odometry alone
+  /// (after a failed match) is not: a kidnapped robot maps the new place with them, untied.
+  bool tied = false;
 };
 
 class PsmSlam {
@@ -111,6 +115,10 @@ class PsmSlam {
   void continueMap(const PoseGraph& graph, const std::vector<LaserScan>& references, const Pose2& start,
                    const Mat3& start_cov, const std::optional<PsmSlamFilterSeed>& seed = std::nullopt,
                    const std::vector<std::pair<int64_t, Mat3>>& node_covariances = {});
+  /// Localising in the continued map instead of extending it (call after continueMap): the map's
+  /// reference scans stay where the map has them (the optimiser holds them fixed); this run's own
+  /// reference scans are temporary, tied to them.
+  void freezeMap() { map_frozen_ = true; }
   /// Each graph node's marginal covariance in the map frame: the filter's now, or when it left
   /// the filter (nodes of a continued map: as loaded, where known).
   std::vector<std::pair<int64_t, Mat3>> nodeCovariances() const;
@@ -227,6 +235,9 @@ class PsmSlam {
   PsmSlamFilter filter_;
   PoseGraph graph_;
   std::vector<Keyframe> keyframes_;        ///< by id (ids are 0, 1, 2, ...)
+  std::vector<bool> tied_;                 ///< by id: the keyframe is tied to the map (PsmSlamScanResult::tied)
+  bool scan_tied_ = false;                 ///< the current scan matched a tied keyframe
+  bool map_frozen_ = false;                ///< freezeMap()
   std::set<int64_t> filter_keyframes_;     ///< ids still in the filter
   std::vector<LoopHypothesis> hypotheses_;
   std::set<int64_t> skeleton_;             ///< older keyframes kept in the filter for loop closure

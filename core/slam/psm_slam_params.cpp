@@ -107,6 +107,8 @@ void describeGraph(ParameterTable& t, PsmSlamParams& p) {
 }
 
 void describeLocalization(ParameterTable& t, MapLocalizationParams& p) {
+  t.boolean("temporary_mapping", p.temporary_mapping,
+            "once placed, track by PSM SLAM over the fixed map with temporary reference scans");
   t.number("track_radius", p.track_radius, 0.0, 1000.0, "m: reference scans matched when tracking within");
   t.angle("track_heading_deg", p.track_heading, 0.0, 180.0, "the same for heading");
   t.integer("track_candidates", p.track_candidates, 1, 100, "tracking matches per scan at most");

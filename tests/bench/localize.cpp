@@ -29,6 +29,9 @@ int main(int argc, char** argv) {
   app.add_option("--config", config_path, "PSM SLAM parameters")->capture_default_str();
   bool continue_mapping = false;
   app.add_flag("--continue", continue_mapping, "the second half continues the map (--mode continue) instead of localising");
+  bool temporary_mapping = false;
+  app.add_flag("--temporary-mapping", temporary_mapping,
+               "localise with localization.temporary_mapping (PSM SLAM over the fixed map) whatever the config says");
   CLI11_PARSE(app, argc, argv);
   if (!std::filesystem::exists(log_path)) {
     std::printf("bench_localize: %s is absent; nothing to measure\n", log_path.c_str());
@@ -41,7 +44,8 @@ int main(int argc, char** argv) {
     if (e.isLaser()) stamps.push_back(e.utime());
   std::sort(stamps.begin(), stamps.end());
   const int64_t split = stamps[stamps.size() / 2];
-  const PsmSlamEstimatorConfig config = loadPsmSlamEstimatorConfig(config_path);
+  PsmSlamEstimatorConfig config = loadPsmSlamEstimatorConfig(config_path);
+  if (temporary_mapping) config.slam.localization.temporary_mapping = true;
 
   PsmSlamEstimator full_run(config);
   for (const CarmenEvent& e : log.events) {
@@ -130,9 +134,9 @@ int main(int argc, char** argv) {
               evaluateRelations(known.joined, first_half).translation.mean);
   std::printf("known start: %.0fx real time; figures %s\n", known.localized_duration_s / known.localize_seconds,
               known.report["localization"].dump().c_str());
-  if (continue_mapping)
-    std::printf("known start, continuing: %zu closures with the map's reference scans of %zu tried\n",
-                known.report["psm_slam"].value("map_loop_closures", size_t{0}),
+  if (known.report.contains("psm_slam"))
+    std::printf("known start, %s: %zu closures with the map's reference scans of %zu tried\n",
+                continue_mapping ? "continuing" : "localising", known.report["psm_slam"].value("map_loop_closures", size_t{0}),
                 known.report["psm_slam"].value("map_candidate_matches", size_t{0}));
   std::printf("%-44s %5zu/%-4zu\n", "second-half scans in mapped places", in_mapped_places, result.online.size());
   std::printf("%-44s %10zu %10s\n", "fixes where the robot was (right)", fixes_right, "");

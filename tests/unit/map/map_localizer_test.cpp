@@ -10,6 +10,7 @@
 
 #include "map/map_store.hpp"
 #include "pipeline/map_continuation_estimator.hpp"
+#include "pipeline/map_localization_estimator.hpp"
 #include "pipeline/psm_slam_estimator.hpp"
 #include "slam/map_localizer.hpp"
 #include "unit/slam/synthetic_run.hpp"
@@ -167,6 +168,97 @@ TEST(MapLocalizer, AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace) {
   }
   std::printf("kidnap noticed within %zu scans on every seed; found again within 20 scans on %zu of 20 seeds\n",
               latest_notice, found_within_20);
+}
+
+/// Feeds `run` to `estimator` and finishes it; the report.
+nlohmann::json runThrough(Estimator& estimator, const SyntheticRun& run) {
+  for (size_t k = 0; k < run.scans.size(); ++k) {
+    estimator.onOdometry(run.odometry[k]);
+    estimator.onLaser(run.scans[k]);
+  }
+  nlohmann::json report;
+  estimator.finish("", report);
+  return report;
+}
+
+PsmSlamEstimatorConfig temporaryMappingConfig() {
+  PsmSlamEstimatorConfig c = testConfig();
+  c.slam.localization.temporary_mapping = true;
+  return c;
+}
+
+// --mode localize with localization.temporary_mapping (map_localization_estimator.hpp): PSM SLAM
+// over the map held fixed, with temporary reference scans. The map does not move and nothing joins it.
+TEST(MapLocalization, AKnownStartTracksOverTheFixedMap) {
+  const StoredMap map = storedMapOfOneLap();
+  std::vector<Pose2> path = loopPathInWorld(2);
+  path.erase(path.begin(), path.begin() + 40);
+  const SyntheticRun run = runAlong(path, 0, Pose2(150.0, -80.0, 2.5), 33);
+  MapLocalizationEstimator localization(map, temporaryMappingConfig(), run.truth.front());
+  const nlohmann::json report = runThrough(localization, run);
+  const std::vector<PoseStamped>& poses = localization.trajectory();
+  ASSERT_EQ(poses.size(), run.truth.size());
+  double worst = 0.0, worst_online = 0.0;
+  for (size_t k = 0; k < poses.size(); ++k) {
+    worst = std::max(worst, distance(poses[k].pose, run.truth[k]));
+    worst_online = std::max(worst_online, distance(localization.onlineTrajectory()[k].pose, run.truth[k]));
+  }
+  std::printf("known start, localised: worst %.3f m online, %.3f m final\n", worst_online, worst);
+  EXPECT_LT(worst, 0.10) << "m from the truth, in the map's frame";
+  EXPECT_LT(worst_online, 0.10);
+  EXPECT_EQ(report["localization"]["tracking_losses"].get<size_t>(), 0u) << report.dump();
+  EXPECT_GT(report["psm_slam"]["map_loop_closures"].get<size_t>(), 10u) << report["psm_slam"].dump();
+  EXPECT_EQ(localization.map().graph.nodes().size(), map.graph.nodes().size());
+}
+
+// The kidnap of MapLocalizer.AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace with temporary
+// mapping: untied scans near the map lose the robot, the global search finds it again, and every
+// pose from a fix on is where the robot is. Along a look-alike corridor the kidnapped robot's
+// scans can tie to the wrong place and go on there: measured 15 of 20 seeds noticed (MapLocalizer
+// alone: 20 of 20; why temporary mapping is not the default), asserted at least 13. How
+// soon is printed (issue 15's goal: found again within 20 scans on every seed).
+TEST(MapLocalization, AKidnappedRobotIsNoticedAndFoundAgainWhereItIs) {
+  const StoredMap map = storedMapOfOneLap();
+  const std::vector<Pose2> path = loopPathInWorld(3);
+  std::mt19937_64 pick(15);
+  size_t found_within_20 = 0, latest_notice = 0, noticed_seeds = 0;
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    const size_t kidnap = 60 + pick() % 40, carried = 40 + pick() % 80;  // scans of the path skipped: 4-12 m
+    std::vector<Pose2> truth(path.begin(), path.begin() + static_cast<long>(kidnap));
+    truth.insert(truth.end(), path.begin() + static_cast<long>(kidnap + carried),
+                 path.begin() + static_cast<long>(std::min(path.size(), kidnap + carried + 150)));
+    const SyntheticRun run = runAlong(truth, kidnap, Pose2(), 100 + seed);
+    MapLocalizationEstimator localization(map, temporaryMappingConfig(), run.truth.front(), Vec3(0.01, 0.01, 1e-4).asDiagonal());
+    runThrough(localization, run);
+    const std::vector<bool>& placed = localization.localizedFlags();
+    std::optional<size_t> noticed, found_again;
+    for (size_t k = 0; k < run.scans.size(); ++k) {
+      if (k < kidnap) {
+        EXPECT_TRUE(placed[k]) << "seed " << seed << ", scan " << k;
+        EXPECT_LT(distance(localization.trajectory()[k].pose, run.truth[k]), 0.10) << "seed " << seed << ", scan " << k;
+      }
+      if (k >= kidnap && !placed[k] && !noticed) noticed = k;
+      if (noticed && placed[k] && !found_again) found_again = k;
+      if (found_again) {
+        EXPECT_LT(distance(localization.onlineTrajectory()[k].pose, run.truth[k]), 0.3)
+            << "seed " << seed << ": a wrong lock-on, scan " << k;
+      }
+    }
+    if (!noticed) {
+      std::printf("seed %2llu: carried %.1f m, the kidnap at scan %zu went unnoticed\n", static_cast<unsigned long long>(seed),
+                  distance(path[kidnap - 1], path[kidnap + carried]), kidnap);
+      continue;
+    }
+    ++noticed_seeds;
+    std::printf("seed %2llu: carried %.1f m, noticed after %zu scans, found again after %lld\n",
+                static_cast<unsigned long long>(seed), distance(path[kidnap - 1], path[kidnap + carried]), *noticed - kidnap,
+                found_again ? static_cast<long long>(*found_again - kidnap) : -1LL);
+    latest_notice = std::max(latest_notice, *noticed - kidnap);
+    if (found_again && *found_again - kidnap <= 20) ++found_within_20;
+  }
+  std::printf("temporary mapping: kidnap noticed on %zu of 20 seeds (within %zu scans); found again within 20 scans on "
+              "%zu of 20\n", noticed_seeds, latest_notice, found_within_20);
+  EXPECT_GE(noticed_seeds, 13u);
 }
 
 /// Feeds `run` to a continuation of `map`; the final trajectory.
