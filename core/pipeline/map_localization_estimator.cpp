@@ -38,22 +38,15 @@ void MapLocalizationEstimator::startTracking(const Pose2& pose, const Mat3& cov)
   tracker_ = std::make_unique<PsmSlamEstimator>(config_);
   tracker_->localizeIn(map_, pose, cov);
   if (last_odometry_) tracker_->onOdometry(*last_odometry_);  // its integrator starts from the latest reading
-  untied_in_a_row_ = 0;
-  scans_since_tied_ = 0;
+  unmatched_near_map_ = 0;
   ++tracked_stretches_;
 }
 
 void MapLocalizationEstimator::search(const LaserScan& scan) {
   last_result_ = localizer_.addScan(scan);
   if (!config_.slam.localization.temporary_mapping || !last_result_.found) return;
-  // The search stretch (and the untied scans before it) re-placed from the fix, as dead reckoning.
+  // The search stretch re-placed from the fix, as dead reckoning.
   const std::vector<PoseStamped> searched = localizer_.trajectory();
-  const Pose2 fix_from_dead_reckoning = searched.back().pose * localizer_.deadReckoning().back().inverse();
-  for (PoseStamped p : untied_tail_) {
-    p.pose = fix_from_dead_reckoning * p.pose;
-    placed_.push_back(p);
-  }
-  untied_tail_.clear();
   placed_.insert(placed_.end(), searched.begin() + static_cast<long>(search_start_), searched.end());
   startTracking(last_result_.pose.pose, last_result_.pose.cov);
 }
@@ -65,13 +58,13 @@ void MapLocalizationEstimator::track(const LaserScan& scan) {
   last_result_.pose = tracker_->onlineTrajectory().back();
   last_result_.usable = r.usable;
   last_result_.localized = true;
-  last_result_.matched = r.tied;
-  scans_since_tied_ = r.tied ? 0 : scans_since_tied_ + 1;
-  // Untied on new ground is where a robot that lost its match (a fast turn) and went on beyond
-  // the map would be too: only untied scans where the map's reference scans should be seen count.
-  if (r.tied) untied_in_a_row_ = 0;
-  else if (r.usable && nearMap(last_result_.pose.pose)) ++untied_in_a_row_;
-  if (untied_in_a_row_ >= config_.slam.localization.lost_near_map_after_scans) loseTracking(scan.utime);
+  last_result_.matched = r.map_matched;
+  map_matched_scans_ += r.map_matched ? 1 : 0;
+  // On new ground the temporary reference scans carry the robot; where the map's reference scans
+  // should be seen and are not, it is not where it is thought to be (a kidnapping, a look-alike).
+  if (r.map_matched) unmatched_near_map_ = 0;
+  else if (r.usable && nearMap(last_result_.pose.pose)) ++unmatched_near_map_;
+  if (unmatched_near_map_ >= config_.slam.localization.lost_near_map_after_scans) loseTracking(scan.utime);
 }
 
 bool MapLocalizationEstimator::nearMap(const Pose2& pose) const {
@@ -84,9 +77,9 @@ bool MapLocalizationEstimator::nearMap(const Pose2& pose) const {
 
 void MapLocalizationEstimator::loseTracking(int64_t utime) {
   const std::vector<PoseStamped> tracked = tracker_->slam().trajectory();
-  const size_t tail = std::min(scans_since_tied_, tracked.size());
-  placed_.insert(placed_.end(), tracked.begin(), tracked.end() - static_cast<long>(tail));
-  untied_tail_.assign(tracked.end() - static_cast<long>(tail), tracked.end());
+  // The scans since the last map match keep their tracked poses: some before a kidnapping are
+  // right, and which ones is not known.
+  placed_.insert(placed_.end(), tracked.begin(), tracked.end());
   temporary_reference_scans_ += tracker_->slam().graph().nodes().size() - static_cast<size_t>(tracker_->slam().mapKeyframes());
   localizer_.searchFrom(tracked.back().pose, utime);
   search_start_ = localizer_.onlineTrajectory().size();
@@ -130,8 +123,7 @@ void MapLocalizationEstimator::finish(const std::string& out_dir, nlohmann::json
     placed_.insert(placed_.end(), poses.begin(), poses.end());
     temporary_reference_scans_ += tracker_->slam().graph().nodes().size() - static_cast<size_t>(tracker_->slam().mapKeyframes());
   } else {
-    // Never found again: the untied scans and the search stay dead reckoning.
-    placed_.insert(placed_.end(), untied_tail_.begin(), untied_tail_.end());
+    // Never found again: the search stays dead reckoning.
     const std::vector<PoseStamped> searched = localizer_.trajectory();
     placed_.insert(placed_.end(), searched.begin() + static_cast<long>(search_start_), searched.end());
   }
@@ -143,6 +135,7 @@ void MapLocalizationEstimator::finish(const std::string& out_dir, nlohmann::json
   if (config_.slam.localization.temporary_mapping) {
     section["scans"] = online_.size();
     section["searched_scans"] = localizer_.stats().scans;
+    section["matched_scans"] = localizer_.stats().matched_scans + map_matched_scans_;  // the fixes, and while tracking
     section["tracked_stretches"] = tracked_stretches_;
     section["tracking_losses"] = tracking_losses_;
     section["temporary_reference_scans"] = temporary_reference_scans_;

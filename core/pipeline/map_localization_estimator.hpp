@@ -7,14 +7,14 @@
 // the map held fixed (PsmSlamEstimator::localizeIn): matches with the map's reference scans tie
 // it to the map, and on ground the map does not hold it maps on with temporary reference scans
 // of its own, closing loops with them and with the map, so a robot that leaves the map comes
-// back to it consistent (Cartographer's pure localisation does the same). `lost_after_scans`
-// scans in a row that match no reference scan tied to the map (PsmSlamScanResult::tied: a
-// kidnapped robot maps the new place untied) lose it: the temporary reference scans are dropped
-// and the global search takes over again, from the first of those scans.
+// back to it consistent (Cartographer's pure localisation does the same). `lost_near_map_after_scans`
+// scans in a row near the map's reference scans (within track_radius and track_heading) without a
+// match with any of them (PsmSlamScanResult::map_matched) lose it: the temporary reference scans
+// are dropped and the global search takes over again.
 //
 // Online trajectory: the poses at scan time. Final trajectory: each tracked stretch as its PSM
-// SLAM graph places it after a final optimisation, each searched stretch (with the untied scans
-// before it) re-placed from the fix that ended it. The map's grid is drawn again with the
+// SLAM graph places it after a final optimisation, each searched stretch re-placed from the fix
+// that ended it. The map's grid is drawn again with the
 // localised trajectory.
 //
 // With localization.temporary_mapping off, MapLocalizer tracks too: the map's reference scans
@@ -63,7 +63,7 @@ class MapLocalizationEstimator : public Estimator {
   void startTracking(const Pose2& pose, const Mat3& cov);
   void track(const LaserScan& scan);
   void search(const LaserScan& scan);
-  /// Untied for too long: back to the global search from the first untied scan's pose.
+  /// Unmatched near the map for too long: back to the global search.
   void loseTracking(int64_t utime);
   /// A reference scan of the map lies within track_radius and track_heading of `pose`.
   bool nearMap(const Pose2& pose) const;
@@ -73,12 +73,11 @@ class MapLocalizationEstimator : public Estimator {
   MapLocalizer localizer_;
   std::unique_ptr<PsmSlamEstimator> tracker_;  ///< placed in the map (temporary mapping)
   std::optional<OdometryReading> last_odometry_;
-  int untied_in_a_row_ = 0;               ///< usable scans near the map
-  size_t scans_since_tied_ = 0;            ///< all scans
+  int unmatched_near_map_ = 0;             ///< usable scans in a row near the map without a map match
+  size_t map_matched_scans_ = 0;           ///< tracked scans matched with the map
   size_t tracking_losses_ = 0, tracked_stretches_ = 0, temporary_reference_scans_ = 0;
   nlohmann::json last_tracking_report_;
   size_t search_start_ = 0;                ///< the localiser's first scan of the current search
-  std::vector<PoseStamped> untied_tail_;   ///< the untied scans that ended tracking, before the search
   std::vector<PoseStamped> placed_;        ///< final poses of the stretches that have ended
   std::vector<PoseStamped> online_, final_;
   std::vector<bool> localized_flags_;

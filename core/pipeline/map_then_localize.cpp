@@ -28,14 +28,10 @@ MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, in
 
   const auto start = std::chrono::steady_clock::now();
   std::optional<Pose2> known_start;
-  // The mapping's uncertainty where it ended, relative to its reference scan there: the map's
-  // poses are the frame now, so its absolute uncertainty (a metre after a long run without a
-  // loop) is not the robot's uncertainty in it.
-  Mat3 start_cov = Mat3::Zero();
+  Mat3 start_cov = Mat3::Zero();  // the mapping's own uncertainty where it ended
   if (options.known_start && !result.mapped.empty()) {
     known_start = result.mapped.back().pose;
-    const int64_t active = mapping.slam().filter().activeKeyframe();
-    if (active >= 0) start_cov = mapping.slam().uncertaintyFromRobot(active);
+    start_cov = mapping.onlineTrajectory().back().cov;
   }
   std::unique_ptr<Estimator> second;
   const MapLocalizationEstimator* localization = nullptr;

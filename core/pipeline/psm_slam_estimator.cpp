@@ -101,9 +101,7 @@ void PsmSlamEstimator::onLaser(const LaserScan& laser) {
 }
 
 void PsmSlamEstimator::localizeIn(const StoredMap& map, const Pose2& start, const Mat3& start_cov) {
-  StoredMap known = map;
-  known.node_covariances.clear();  // the map's poses are the frame: known, not estimated
-  continueMap(known, start, start_cov);
+  continueMap(map, start, start_cov);
   slam_.freezeMap();
 }
 

@@ -97,8 +97,6 @@ class MapLocalizer {
   const std::vector<PoseStamped>& onlineTrajectory() const { return online_; }
   /// One pose per scan, the odometry-only stretches re-placed from the fix that ended them.
   std::vector<PoseStamped> trajectory() const;
-  /// Per scan: the dead-reckoning pose (before any match), in the frame of the poses around it.
-  const std::vector<Pose2>& deadReckoning() const { return dead_reckoning_; }
   /// Per scan: whether its online pose was tied to the map.
   const std::vector<bool>& localizedFlags() const { return localized_flags_; }
   const MapLocalizerStats& stats() const { return stats_; }

@@ -68,7 +68,6 @@ void PsmSlam::continueMap(const PoseGraph& graph, const std::vector<LaserScan>& 
       throw std::invalid_argument("the map's graph nodes are not numbered 0.." + std::to_string(references.size() - 1));
     std::optional<PreparedScan> prepared = prepareMatchableScan(references[i], params_.psm);
     keyframes_.push_back({id, references[i].utime, references[i].laser_pose, prepared ? std::move(*prepared) : PreparedScan{}});
-    tied_.push_back(true);
   }
   graph_ = graph;
   for (const auto& [id, cov] : node_covariances) left_filter_cov_[id] = cov;
@@ -403,10 +402,7 @@ bool PsmSlam::selectReference(const LaserScan& scan, PreparedScan& prepared, con
       if (c.id < map_keyframes_) ++stats_.map_loop_closures;
     }
   }
-  if (std::any_of(accepted.begin(), accepted.end(), [&](const Observation& o) { return tied_[static_cast<size_t>(o.keyframe)]; })) {
-    scan_tied_ = true;  // and what it matched with them is tied through it
-    for (const Observation& o : accepted) tied_[static_cast<size_t>(o.keyframe)] = true;
-  }
+  scan_map_matched_ = std::any_of(accepted.begin(), accepted.end(), [&](const Observation& o) { return o.keyframe < map_keyframes_; });
   const Observation* reuse = nullptr;
   for (const Observation& o : accepted) {
     if (o.keyframe == previous) continue;
@@ -547,7 +543,6 @@ void PsmSlam::addKeyframe(const LaserScan& scan, PreparedScan prepared, const st
   if (link && previous >= 0)
     addGraphEdge(previous, id, link->mean, link->cov + covarianceFloor(1e-3, 1e-3), PoseGraphEdgeKind::Odometry);
   keyframes_.push_back({id, scan.utime, scan.laser_pose, std::move(prepared)});
-  tied_.push_back(scan_tied_ || id == 0);  // a fresh run's first keyframe is its frame
   ++stats_.keyframes;
   marginaliseOldKeyframes();
 }
@@ -646,8 +641,7 @@ void PsmSlam::record(int64_t utime, PsmSlamScanResult& result) {
 PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
   ++stats_.scans;
   PsmSlamScanResult result;
-  // The first scan of a continued map is where the start pose (given, or found in the map) says.
-  scan_tied_ = map_keyframes_ > 0 && stats_.scans == 1;
+  scan_map_matched_ = false;
   startClock(scan.utime);
   predictTo(scan.utime);
   std::optional<PreparedScan> prepared = prepareMatchableScan(scan, params_.psm);
@@ -659,7 +653,7 @@ PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
   result.usable = true;
   if (keyframes_.empty()) {
     addKeyframe(scan, std::move(*prepared), {}, std::nullopt, -1);
-    result.new_keyframe = result.tied = true;
+    result.new_keyframe = true;
     record(scan.utime, result);
     return result;
   }
@@ -668,11 +662,11 @@ PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
     if (odometry_still_ && robotStill(*tracked)) {
       result.held = true;
       ++stats_.held_scans;
-      scan_tied_ = tied_[static_cast<size_t>(tracked->keyframe)];
+      scan_map_matched_ = tracked->keyframe < map_keyframes_;
     } else if (applyTrackingMatch(*tracked)) {
       result.tracked = true;
       ++stats_.tracked_scans;
-      scan_tied_ = tied_[static_cast<size_t>(tracked->keyframe)];
+      scan_map_matched_ = tracked->keyframe < map_keyframes_;
     } else {
       ++stats_.gate_rejections;
       tracked.reset();
@@ -687,7 +681,7 @@ PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
     result.new_keyframe = keyframes_.size() > keyframes_before;
     if (result.loop_closed) loop_pending_ = true;
   }
-  result.tied = scan_tied_;
+  result.map_matched = scan_map_matched_;
   if (loop_pending_ && params_.optimize_on_loop &&
       static_cast<int64_t>(keyframes_.size()) - keyframes_at_last_optimization_ >=
           params_.min_keyframes_between_optimizations) {

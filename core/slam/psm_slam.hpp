@@ -92,10 +92,8 @@ struct PsmSlamScanResult {
   bool new_keyframe = false;
   bool loop_closed = false;
   bool optimized = false;
-  /// The scan matched a reference scan tied to the map: one of the map's, the run's first, or one
-  /// placed by such a match. A scan that matches only reference scans placed by odometry alone
-  /// (after a failed match) is not: a kidnapped robot maps the new place with them, untied.
-  bool tied = false;
+  /// A match with one of a continued map's reference scans updated the pose on this scan.
+  bool map_matched = false;
 };
 
 class PsmSlam {
@@ -117,7 +115,8 @@ class PsmSlam {
                    const std::vector<std::pair<int64_t, Mat3>>& node_covariances = {});
   /// Localising in the continued map instead of extending it (call after continueMap): the map's
   /// reference scans stay where the map has them (the optimiser holds them fixed); this run's own
-  /// reference scans are temporary, tied to them.
+  /// reference scans are temporary. (All of the map's in the filter instead of its skeleton was
+  /// tried: on MIT CSAIL the robot was then lost twice from a known start.)
   void freezeMap() { map_frozen_ = true; }
   /// Each graph node's marginal covariance in the map frame: the filter's now, or when it left
   /// the filter (nodes of a continued map: as loaded, where known).
@@ -235,8 +234,7 @@ class PsmSlam {
   PsmSlamFilter filter_;
   PoseGraph graph_;
   std::vector<Keyframe> keyframes_;        ///< by id (ids are 0, 1, 2, ...)
-  std::vector<bool> tied_;                 ///< by id: the keyframe is tied to the map (PsmSlamScanResult::tied)
-  bool scan_tied_ = false;                 ///< the current scan matched a tied keyframe
+  bool scan_map_matched_ = false;          ///< PsmSlamScanResult::map_matched of the current scan
   bool map_frozen_ = false;                ///< freezeMap()
   std::set<int64_t> filter_keyframes_;     ///< ids still in the filter
   std::vector<LoopHypothesis> hypotheses_;

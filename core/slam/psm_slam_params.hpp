@@ -15,10 +15,8 @@ struct MapLocalizationParams {
   /// Once placed in the map, the robot is tracked by PSM SLAM over the map held fixed, with
   /// temporary reference scans of its own for ground the map does not hold (never saved; like
   /// Cartographer's pure localisation): docs/maps.md. Off: the map's reference scans only, and a
-  /// single local reference on new ground (map_localizer.hpp). Off by default: along a
-  /// look-alike corridor a kidnapped robot's scans can tie to the wrong place and go unnoticed
-  /// (docs/maps.md, measured).
-  bool temporary_mapping = false;
+  /// single local reference on new ground (map_localizer.hpp).
+  bool temporary_mapping = true;
   /// Tracking: reference scans within this distance and heading of the predicted pose are
   /// matched, nearest first, at most track_candidates of them per scan.
   double track_radius = 2.0;             ///< m

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <optional>
 
@@ -127,6 +128,15 @@ int main(int argc, char** argv) {
               evaluateRelations(known.localized, second_half).translation.mean,
               evaluateRelations(known.joined, across_split).translation.mean);
   const double known_joined = evaluateRelations(known.joined, relations).translation.mean;
+  if (std::getenv("POLARSLAM_BENCH_WORST")) {  // the worst relations across the split, known start
+    RelationMetric m = evaluateRelations(known.joined, across_split);
+    std::sort(m.errors.begin(), m.errors.end(), [](const RelationError& a, const RelationError& b) { return a.translation > b.translation; });
+    for (size_t i = 0; i < std::min<size_t>(12, m.errors.size()); ++i) {
+      const Relation& r = across_split[m.errors[i].relation_index];
+      std::printf("  across: %7.1f s -> %7.1f s from the split: %.3f m off (relation %.2f m)\n", 1e-6 * double(r.t1 - split),
+                  1e-6 * double(r.t2 - split), m.errors[i].translation, r.motion().translation().norm());
+    }
+  }
   std::printf("%-44s %10.4f %10.2f  (goal <= 1.25)\n", "known start: relation error, joined [m] | ratio", known_joined,
               known_joined / full.translation.mean);
   std::printf("%-44s %10.4f %10.4f\n", "known start: first half, full run | joined [m]",
@@ -135,9 +145,11 @@ int main(int argc, char** argv) {
   std::printf("known start: %.0fx real time; figures %s\n", known.localized_duration_s / known.localize_seconds,
               known.report["localization"].dump().c_str());
   if (known.report.contains("psm_slam"))
-    std::printf("known start, %s: %zu closures with the map's reference scans of %zu tried\n",
+    std::printf("known start, %s: %zu closures with the map's reference scans of %zu tried; %zu loop edges disowned "
+                "by the optimiser\n",
                 continue_mapping ? "continuing" : "localising", known.report["psm_slam"].value("map_loop_closures", size_t{0}),
-                known.report["psm_slam"].value("map_candidate_matches", size_t{0}));
+                known.report["psm_slam"].value("map_candidate_matches", size_t{0}),
+                known.report["psm_slam"].value("rejected_loop_edges", size_t{0}));
   std::printf("%-44s %5zu/%-4zu\n", "second-half scans in mapped places", in_mapped_places, result.online.size());
   std::printf("%-44s %10zu %10s\n", "fixes where the robot was (right)", fixes_right, "");
   std::printf("%-44s %10zu %10s\n", "fixes more than 1 m or 15 deg off (wrong)", fixes_wrong, "0");

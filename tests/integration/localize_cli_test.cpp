@@ -39,7 +39,11 @@ TEST(LocalizeCli, TheDefaultLogLocalisesInAndContinuesItsOwnSavedMapAndBadOption
   const auto& loc = report["localization"];
   EXPECT_EQ(loc["global_searches"], 0) << "a known start needs no search";
   EXPECT_EQ(loc["losses"], 0);
-  EXPECT_GT(loc["matched_scans"].get<int>(), 0.9 * loc["scans"].get<int>()) << loc.dump(2);
+  // Temporary mapping (the default): between the map's reference scans, taken up again only near
+  // its skeleton, the robot tracks temporary ones of its own (measured: 563 of 1537 scans matched
+  // with the map; MapLocalizer alone, which has nothing else, over 90 %).
+  EXPECT_GT(loc["matched_scans"].get<int>(), 0.3 * loc["scans"].get<int>()) << loc.dump(2);
+  EXPECT_GT(report["psm_slam"]["map_loop_closures"].get<int>(), 10) << report["psm_slam"].dump(2);
   EXPECT_LT(report["ate_rmse_m"].get<double>(), 0.10) << "the map's frame is the mapping run's start frame";
   EXPECT_TRUE(fs::exists(dir / "localize" / "map.png"));
   EXPECT_TRUE(fs::exists(dir / "localize" / "trajectory.tum"));
