@@ -58,6 +58,12 @@ struct Pose2 {
 /// Relative pose of b seen from a: (⊖a) ⊕ b.
 inline Pose2 between(const Pose2& a, const Pose2& b) { return a.inverse() * b; }
 
+/// Whether `b` lies within `translation` and `rotation` of `a` (in a's frame).
+inline bool isNear(const Pose2& a, const Pose2& b, double translation, double rotation) {
+  const Pose2 apart = between(a, b);
+  return apart.translation().norm() <= translation && std::abs(apart.theta) <= rotation;
+}
+
 /// Jacobians of c = a ⊕ b with respect to a and b.
 inline Mat3 composeJacobianA(const Pose2& a, const Pose2& b) {
   const double c = std::cos(a.theta), s = std::sin(a.theta);

@@ -69,10 +69,13 @@ void MapLocalizationEstimator::track(const LaserScan& scan) {
 
 bool MapLocalizationEstimator::nearMap(const Pose2& pose) const {
   const MapLocalizationParams& p = config_.slam.localization;
-  return std::any_of(map_.graph.nodes().begin(), map_.graph.nodes().end(), [&](const PoseGraphNode& node) {
-    const Pose2 apart = between(node.pose, pose);
-    return apart.translation().norm() <= p.track_radius && std::abs(apart.theta) <= p.track_heading;
-  });
+  return std::any_of(map_.graph.nodes().begin(), map_.graph.nodes().end(),
+                     [&](const PoseGraphNode& node) { return isNear(node.pose, pose, p.track_radius, p.track_heading); });
+}
+
+void MapLocalizationEstimator::countTemporaryReferenceScans() {
+  const PsmSlam& slam = tracker_->slam();
+  temporary_reference_scans_ += slam.graph().nodes().size() - static_cast<size_t>(slam.mapKeyframes());
 }
 
 void MapLocalizationEstimator::loseTracking(int64_t utime) {
@@ -80,7 +83,7 @@ void MapLocalizationEstimator::loseTracking(int64_t utime) {
   // The scans since the last map match keep their tracked poses: some before a kidnapping are
   // right, and which ones is not known.
   placed_.insert(placed_.end(), tracked.begin(), tracked.end());
-  temporary_reference_scans_ += tracker_->slam().graph().nodes().size() - static_cast<size_t>(tracker_->slam().mapKeyframes());
+  countTemporaryReferenceScans();
   localizer_.searchFrom(tracked.back().pose, utime);
   search_start_ = localizer_.onlineTrajectory().size();
   tracker_.reset();
@@ -121,7 +124,7 @@ void MapLocalizationEstimator::finish(const std::string& out_dir, nlohmann::json
     report["psm_slam"] = tracked["psm_slam"];
     const std::vector<PoseStamped>& poses = tracker_->trajectory();
     placed_.insert(placed_.end(), poses.begin(), poses.end());
-    temporary_reference_scans_ += tracker_->slam().graph().nodes().size() - static_cast<size_t>(tracker_->slam().mapKeyframes());
+    countTemporaryReferenceScans();
   } else {
     // Never found again: the search stays dead reckoning.
     const std::vector<PoseStamped> searched = localizer_.trajectory();

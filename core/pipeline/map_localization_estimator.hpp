@@ -14,8 +14,7 @@
 //
 // Online trajectory: the poses at scan time. Final trajectory: each tracked stretch as its PSM
 // SLAM graph places it after a final optimisation, each searched stretch re-placed from the fix
-// that ended it. The map's grid is drawn again with the
-// localised trajectory.
+// that ended it. The map's grid is drawn again with the localised trajectory.
 //
 // With localization.temporary_mapping off, MapLocalizer tracks too: the map's reference scans
 // only, and a single local reference on new ground.
@@ -67,6 +66,8 @@ class MapLocalizationEstimator : public Estimator {
   void loseTracking(int64_t utime);
   /// A reference scan of the map lies within track_radius and track_heading of `pose`.
   bool nearMap(const Pose2& pose) const;
+  /// Adds the reference scans the current tracked stretch added to the map's.
+  void countTemporaryReferenceScans();
 
   StoredMap map_;
   PsmSlamEstimatorConfig config_;
@@ -76,7 +77,6 @@ class MapLocalizationEstimator : public Estimator {
   int unmatched_near_map_ = 0;             ///< usable scans in a row near the map without a map match
   size_t map_matched_scans_ = 0;           ///< tracked scans matched with the map
   size_t tracking_losses_ = 0, tracked_stretches_ = 0, temporary_reference_scans_ = 0;
-  nlohmann::json last_tracking_report_;
   size_t search_start_ = 0;                ///< the localiser's first scan of the current search
   std::vector<PoseStamped> placed_;        ///< final poses of the stretches that have ended
   std::vector<PoseStamped> online_, final_;

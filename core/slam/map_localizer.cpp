@@ -20,11 +20,6 @@ double positionSigma(const Mat3& cov) {
   return std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(cov.topLeftCorner<2, 2>()).eigenvalues().maxCoeff()));
 }
 
-/// Whether `b` lies within `translation` and `rotation` of `a` (in a's frame).
-bool near(const Pose2& a, const Pose2& b, double translation, double rotation) {
-  const Pose2 apart = between(a, b);
-  return apart.translation().norm() <= translation && std::abs(apart.theta) <= rotation;
-}
 
 }  // namespace
 
@@ -100,7 +95,7 @@ bool MapLocalizer::goodFix(const Fix& fix, bool global) const {
 
 bool MapLocalizer::odometryFaultExplains(const Pose2& measured) const {
   auto within = [&](const Pose2& from) {
-    return near(from, measured, params_.max_odometry_fault_translation, params_.max_odometry_fault_rotation);
+    return isNear(from, measured, params_.max_odometry_fault_translation, params_.max_odometry_fault_rotation);
   };
   return within(pose_) || within(constantVelocityPose());
 }
@@ -192,7 +187,7 @@ bool MapLocalizer::trackNewGround(const PreparedScan& scan, const Pose2& mount) 
   pose_ = fix.pose;
   cov_ = Ja * ref.cov * Ja.transpose() + fix.cov;
   ++stats_.new_ground_scans;
-  if (!near(ref.pose, pose_, params_.keyframe_distance, params_.keyframe_angle) || m->overlap < params_.keyframe_min_overlap)
+  if (!isNear(ref.pose, pose_, params_.keyframe_distance, params_.keyframe_angle) || m->overlap < params_.keyframe_min_overlap)
     newLocalReference(scan, mount);
   return true;
 }
@@ -224,7 +219,7 @@ std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& r
   });
   std::vector<size_t> supporting;
   for (const Fix& other : hits)
-    if (near(best->pose, other.pose, options_.confirm_translation, options_.confirm_rotation) &&
+    if (isNear(best->pose, other.pose, options_.confirm_translation, options_.confirm_rotation) &&
         std::find(supporting.begin(), supporting.end(), other.reference) == supporting.end())
       supporting.push_back(other.reference);
   if (supporting.size() < static_cast<size_t>(options_.global_min_support)) {
@@ -233,7 +228,7 @@ std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& r
   }
   for (const Fix& other : hits) {
     const bool elsewhere =
-        !near(best->pose, other.pose, options_.global_ambiguity_distance, params_.loop_ambiguity_heading);
+        !isNear(best->pose, other.pose, options_.global_ambiguity_distance, params_.loop_ambiguity_heading);
     if (elsewhere && other.fit >= best->fit - options_.global_fit_margin) {
       ++stats_.global_ambiguous;
       return std::nullopt;
@@ -263,7 +258,7 @@ void MapLocalizer::searchFrom(const Pose2& pose, int64_t utime) {
 
 bool MapLocalizer::searchDue(const Pose2& predicted) const {
   return !last_search_at_ ||
-         !near(*last_search_at_, predicted, options_.global_search_spacing, options_.global_search_turn);
+         !isNear(*last_search_at_, predicted, options_.global_search_spacing, options_.global_search_turn);
 }
 
 void MapLocalizer::searchAndConfirm(const LaserScan& raw, const PreparedScan& scan, const Pose2& predicted,
@@ -274,7 +269,7 @@ void MapLocalizer::searchAndConfirm(const LaserScan& raw, const PreparedScan& sc
     hypothesis_.reset();
     return;
   }
-  const bool confirmed = hypothesis_ && near(hypothesis_->pose * between(hypothesis_->odometry_pose, predicted),
+  const bool confirmed = hypothesis_ && isNear(hypothesis_->pose * between(hypothesis_->odometry_pose, predicted),
                                              hit->pose, options_.confirm_translation, options_.confirm_rotation);
   if (!confirmed) {
     if (hypothesis_) ++stats_.global_unconfirmed;

@@ -370,7 +370,8 @@ std::vector<PsmSlam::Candidate> PsmSlam::referenceCandidates() const {
   return candidates;
 }
 
-bool PsmSlam::selectReference(const LaserScan& scan, PreparedScan& prepared, const std::optional<Observation>& tracked) {
+bool PsmSlam::selectReference(const LaserScan& scan, PreparedScan& prepared, const std::optional<Observation>& tracked,
+                              bool& map_matched) {
   const int64_t previous = filter_.activeKeyframe();
   const RelativePosePrediction link = filter_.predictRelative(previous);
   std::vector<Observation> accepted;
@@ -402,7 +403,7 @@ bool PsmSlam::selectReference(const LaserScan& scan, PreparedScan& prepared, con
       if (c.id < map_keyframes_) ++stats_.map_loop_closures;
     }
   }
-  scan_map_matched_ = std::any_of(accepted.begin(), accepted.end(), [&](const Observation& o) { return o.keyframe < map_keyframes_; });
+  map_matched = std::any_of(accepted.begin(), accepted.end(), [&](const Observation& o) { return o.keyframe < map_keyframes_; });
   const Observation* reuse = nullptr;
   for (const Observation& o : accepted) {
     if (o.keyframe == previous) continue;
@@ -641,7 +642,6 @@ void PsmSlam::record(int64_t utime, PsmSlamScanResult& result) {
 PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
   ++stats_.scans;
   PsmSlamScanResult result;
-  scan_map_matched_ = false;
   startClock(scan.utime);
   predictTo(scan.utime);
   std::optional<PreparedScan> prepared = prepareMatchableScan(scan, params_.psm);
@@ -662,11 +662,11 @@ PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
     if (odometry_still_ && robotStill(*tracked)) {
       result.held = true;
       ++stats_.held_scans;
-      scan_map_matched_ = tracked->keyframe < map_keyframes_;
+      result.map_matched = tracked->keyframe < map_keyframes_;
     } else if (applyTrackingMatch(*tracked)) {
       result.tracked = true;
       ++stats_.tracked_scans;
-      scan_map_matched_ = tracked->keyframe < map_keyframes_;
+      result.map_matched = tracked->keyframe < map_keyframes_;
     } else {
       ++stats_.gate_rejections;
       tracked.reset();
@@ -677,11 +677,10 @@ PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
   }
   if (needsNewReference(tracked)) {
     const size_t keyframes_before = keyframes_.size();
-    result.loop_closed = selectReference(scan, *prepared, tracked);
+    result.loop_closed = selectReference(scan, *prepared, tracked, result.map_matched);
     result.new_keyframe = keyframes_.size() > keyframes_before;
     if (result.loop_closed) loop_pending_ = true;
   }
-  result.map_matched = scan_map_matched_;
   if (loop_pending_ && params_.optimize_on_loop &&
       static_cast<int64_t>(keyframes_.size()) - keyframes_at_last_optimization_ >=
           params_.min_keyframes_between_optimizations) {

@@ -216,7 +216,9 @@ class PsmSlam {
   bool confirmedByHypothesis(const Pose2& robot, const Pose2& map_pose) const;
   std::vector<Candidate> referenceCandidates() const;
   /// Matches candidates, then reuses one or adds the scan as a keyframe. True if a loop closed.
-  bool selectReference(const LaserScan& scan, PreparedScan& prepared, const std::optional<Observation>& tracked);
+  /// Sets `map_matched` when an accepted match (the tracking one included) is with the map.
+  bool selectReference(const LaserScan& scan, PreparedScan& prepared, const std::optional<Observation>& tracked,
+                       bool& map_matched);
   void reuseReference(const Observation& chosen, const std::vector<Observation>& accepted);
   void addKeyframe(const LaserScan& scan, PreparedScan prepared, const std::vector<Observation>& accepted,
                    const std::optional<RelativePosePrediction>& link, int64_t previous);
@@ -234,7 +236,6 @@ class PsmSlam {
   PsmSlamFilter filter_;
   PoseGraph graph_;
   std::vector<Keyframe> keyframes_;        ///< by id (ids are 0, 1, 2, ...)
-  bool scan_map_matched_ = false;          ///< PsmSlamScanResult::map_matched of the current scan
   bool map_frozen_ = false;                ///< freezeMap()
   std::set<int64_t> filter_keyframes_;     ///< ids still in the filter
   std::vector<LoopHypothesis> hypotheses_;
