@@ -73,6 +73,14 @@ SyntheticRun runAlong(const std::vector<Pose2>& path, size_t hidden_step, const 
   return run;
 }
 
+/// A second run in the building: two laps starting 40 scans into the loop (not at the map's
+/// origin), its odometry moved far away.
+SyntheticRun runFromMidLoop(uint64_t seed) {
+  std::vector<Pose2> path = loopPathInWorld(2);
+  path.erase(path.begin(), path.begin() + 40);
+  return runAlong(path, 0, Pose2(150.0, -80.0, 2.5), seed);
+}
+
 struct Localised {
   std::vector<MapLocalizationResult> results;
   MapLocalizerStats stats;
@@ -95,9 +103,7 @@ double distance(const Pose2& a, const Pose2& b) { return (a.translation() - b.tr
 // unambiguously (issue 15's goal of a fix within 10 scans is not met yet: printed, not asserted).
 TEST(MapLocalizer, FindsAnUnknownStartAndThenTracksTheMap) {
   const std::vector<MapReference> map = mapOfOneLap();
-  std::vector<Pose2> path = loopPathInWorld(2);
-  path.erase(path.begin(), path.begin() + 40);  // starts somewhere along the loop, not at the map's origin
-  const SyntheticRun run = runAlong(path, 0, Pose2(150.0, -80.0, 2.5), 21);
+  const SyntheticRun run = runFromMidLoop(21);
   const Localised loc = localise(map, run);
   ASSERT_GE(loc.stats.first_fix_scan, 0) << "never found";
   std::printf("unknown start found at scan %lld (%zu ambiguous searches)\n",
@@ -224,9 +230,7 @@ PsmSlamEstimatorConfig temporaryMappingConfig() {
 // over the map held fixed, with temporary reference scans. The map does not move and nothing joins it.
 TEST(MapLocalization, AKnownStartTracksOverTheFixedMap) {
   const StoredMap map = storedMapOfOneLap();
-  std::vector<Pose2> path = loopPathInWorld(2);
-  path.erase(path.begin(), path.begin() + 40);
-  const SyntheticRun run = runAlong(path, 0, Pose2(150.0, -80.0, 2.5), 33);
+  const SyntheticRun run = runFromMidLoop(33);
   MapLocalizationEstimator localization(map, temporaryMappingConfig(), run.truth.front());
   const nlohmann::json report = runThrough(localization, run);
   const std::vector<PoseStamped>& poses = localization.trajectory();
@@ -277,25 +281,12 @@ TEST(MapLocalization, AKidnappedRobotIsNoticedAndFoundAgainWhereItIs) {
   tally.print("temporary mapping");
 }
 
-/// Feeds `run` to a continuation of `map`; the final trajectory.
-std::vector<PoseStamped> continueMapping(MapContinuationEstimator& continuation, const SyntheticRun& run,
-                                         nlohmann::json& report) {
-  for (size_t k = 0; k < run.scans.size(); ++k) {
-    continuation.onOdometry(run.odometry[k]);
-    continuation.onLaser(run.scans[k]);
-  }
-  continuation.finish("", report);
-  return continuation.trajectory();
-}
-
 TEST(MapContinuation, AKnownStartMapsOnInTheMapsFrameAndClosesLoopsWithIt) {
   const StoredMap map = storedMapOfOneLap();
-  std::vector<Pose2> path = loopPathInWorld(2);
-  path.erase(path.begin(), path.begin() + 40);
-  const SyntheticRun run = runAlong(path, 0, Pose2(150.0, -80.0, 2.5), 31);
+  const SyntheticRun run = runFromMidLoop(31);
   MapContinuationEstimator continuation(map, testConfig(), run.truth.front());
-  nlohmann::json report;
-  const std::vector<PoseStamped> poses = continueMapping(continuation, run, report);
+  const nlohmann::json report = runThrough(continuation, run);
+  const std::vector<PoseStamped>& poses = continuation.trajectory();
   ASSERT_EQ(poses.size(), run.truth.size());
   double worst = 0.0;
   for (size_t k = 0; k < poses.size(); ++k) worst = std::max(worst, distance(poses[k].pose, run.truth[k]));
@@ -311,12 +302,10 @@ TEST(MapContinuation, AKnownStartMapsOnInTheMapsFrameAndClosesLoopsWithIt) {
 
 TEST(MapContinuation, AnUnknownStartIsSearchedFirstThenMappingGoesOn) {
   const StoredMap map = storedMapOfOneLap();
-  std::vector<Pose2> path = loopPathInWorld(2);
-  path.erase(path.begin(), path.begin() + 40);
-  const SyntheticRun run = runAlong(path, 0, Pose2(150.0, -80.0, 2.5), 32);
+  const SyntheticRun run = runFromMidLoop(32);
   MapContinuationEstimator continuation(map, testConfig(), std::nullopt);
-  nlohmann::json report;
-  const std::vector<PoseStamped> poses = continueMapping(continuation, run, report);
+  const nlohmann::json report = runThrough(continuation, run);
+  const std::vector<PoseStamped>& poses = continuation.trajectory();
   ASSERT_TRUE(continuation.mapping()) << "the start was never found";
   const size_t found = report["localization"]["scans_before_mapping"].get<size_t>();
   ASSERT_GT(found, 0u);
