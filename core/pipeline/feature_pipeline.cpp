@@ -25,6 +25,8 @@ void describeSlam(ParameterTable& t, FeatureSlamParams& p) {
   t.number("anchor_radius", p.anchor_radius, 0.0, 1e3, "m: map features within this anchor a laser scan");
   t.integer("max_anchors", p.max_anchors, 0, 10000, "anchors per scan at most");
   t.number("latency_s", p.latency_s, 0.0, 60.0, "s of stream time odometry waits for feature sets");
+  t.number("max_feature_lag_s", p.max_feature_lag_s, 0.0, 3600.0,
+           "s of stream time odometry waits for the feature set of a scan already received");
   t.number("ambiguity_nis_margin", p.association.ambiguity_nis_margin, 0.0, 1e6,
            "a rival association within this joint NIS of the best is ambiguous");
   t.integer("max_jcbb_nodes", p.association.max_nodes, 1, 100000000, "JCBB search budget per feature set");
@@ -36,6 +38,8 @@ void describeFusion(ParameterTable& t, FeaturePipelineConfig& c) {
   t.number("max_sonar_offset_s", f.max_sonar_offset_s, 0.0, 10.0, "s: sonar cycles this close to a scan are fused");
   t.number("sonar_wait_s", f.sonar_wait_s, 0.0, 10.0, "s of stream time a laser set waits for sonar cycles");
   t.number("laser_wait_s", f.laser_wait_s, 0.0, 10.0, "s a sonar cycle waits for a laser set (also hint age)");
+  t.number("max_laser_lag_s", f.max_laser_lag_s, 0.0, 3600.0,
+           "s of stream time a sonar cycle waits for the laser set of a scan already received");
   t.boolean("laser_aided_selection", f.laser_aided_selection, "sonar targets checked against the raw laser scan");
   t.boolean("sonar_break_hints", c.sonar_break_hints, "sonar corners and edges break laser segments");
 }
@@ -77,6 +81,7 @@ FeaturePipelineConfig configForRobot(const RobotDescription& robot, SlamSensors 
   c.sensors = sensors;
   c.fusion.use_laser = sensors != SlamSensors::Sonar;
   c.fusion.use_sonar = sensors != SlamSensors::Laser;
+  c.slam.feature_set_per_scan = c.fusion.use_laser;
   c.sonar_break_hints = sensors == SlamSensors::Fused;
   c.fusion.laser_aided_selection = sensors == SlamSensors::Fused;
   // The odometry model with the robot's own wheel base and wheel-error constants (docs/algorithms.md §17.6);

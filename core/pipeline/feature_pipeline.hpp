@@ -13,7 +13,8 @@
 // fusion before the LASER_FEATURES made from it), so the same messages give the same outputs.
 // Every stage is deterministic in its input order and buffers by stream time (the fusion waits
 // `sonar_wait_s` for sonar, the EKF `latency_s` for features), which absorbs the latency of the
-// hops between processes.
+// hops between processes; the set made from a LASER scan the stage has already received is
+// waited for however late (up to max_laser_lag_s / max_feature_lag_s for a stalled peer).
 //
 // Configuration file (`--config`, the same for every stage): either a robot file
 // (config/robots/*.yaml: laser error model, wheel base and wheel-error constants, sonar noise) or

@@ -164,6 +164,7 @@ void FeatureSlamEstimator::finish(const std::string& out_dir, nlohmann::json& re
                    {"tentative_expired", s.tentative_expired},
                    {"failed_updates", s.failed_updates},
                    {"jcbb_budget_exhausted", s.jcbb_budget_exhausted},
+                   {"gave_up_waiting_for_features", s.gave_up_waiting},
                    {"rejected", s.reject_reasons},
                    {"updates", s.updates},
                    {"mean_update_ms", s.updates > 0 ? 1e3 * s.update_seconds / static_cast<double>(s.updates) : 0.0},
@@ -182,7 +183,8 @@ void FeatureSlamEstimator::finish(const std::string& out_dir, nlohmann::json& re
                       {"sonar_spurious_rejected", f.selection.spurious},
                       {"sonar_points_unsupported", f.selection.unsupported},
                       {"sonar_kept_glass", f.selection.kept_glass},
-                      {"late_inputs", f.late}};
+                      {"late_inputs", f.late},
+                      {"missing_laser_sets", f.missing_laser_sets}};
   report["rejected_inputs"] = rejected_;
 }
 

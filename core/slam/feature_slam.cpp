@@ -219,6 +219,7 @@ std::string FeatureSlam::requestAnchors(int64_t utime) {
     return "anchors: requested for a time already processed";
   }
   stream_time_ = std::max(stream_time_, utime);
+  last_scan_utime_ = std::max(last_scan_utime_, utime);
   anchor_queue_.push_back(utime);
   process(false);
   return {};
@@ -227,8 +228,17 @@ std::string FeatureSlam::requestAnchors(int64_t utime) {
 void FeatureSlam::flush() { process(true); }
 
 void FeatureSlam::process(bool flushing) {
-  const int64_t latency = micros(params_.latency_s);
-  auto waited = [&](int64_t t) { return flushing || stream_time_ - t >= latency; };
+  const int64_t latency = micros(params_.latency_s), max_lag = micros(params_.max_feature_lag_s);
+  // True once nothing older than t can still come on the feature stream: `latency_s` for sets
+  // nobody announced, and an announced scan's set is waited for (see feature_set_per_scan).
+  auto waited = [&](int64_t t) {
+    if (flushing) return true;
+    const bool scan_set_due = params_.feature_set_per_scan && last_scan_utime_ > last_feature_utime_;
+    if (!scan_set_due) return stream_time_ - t >= latency;
+    if (stream_time_ - t < max_lag) return false;
+    ++stats_.gave_up_waiting;
+    return true;
+  };
   while (true) {
     const int64_t t_odo = odometry_queue_.empty() ? kNever : odometry_queue_.front().utime;
     const int64_t t_feat = feature_queue_.empty() ? kNever : feature_queue_.front().utime;

@@ -23,7 +23,10 @@
 //
 // Input arrives in any interleaving; everything is processed in time order. A feature set is
 // processed once odometry reaches its time stamp (or `latency_s` of stream time has passed), so
-// feature sets may lag odometry by up to `latency_s`. Nothing here throws on bad input: it is
+// feature sets may lag odometry by up to `latency_s`. With `feature_set_per_scan` (the laser feeds
+// the feature stream), every scan announced by requestAnchors() has a feature set on its way:
+// until it arrives nothing later is processed, however far the stream it comes on lags (a slow
+// or loaded machine), up to `max_feature_lag_s` for a stalled peer. Nothing here throws on bad input: it is
 // counted in stats() and skipped.
 #include <cstdint>
 #include <deque>
@@ -60,6 +63,10 @@ struct FeatureSlamParams {
   double anchor_radius = 5.0;         ///< m
   int max_anchors = 24;
   double latency_s = 0.3;             ///< how long odometry waits for feature sets of its time
+  /// Every laser scan (requestAnchors) is followed by a feature set of its time stamp (the fused
+  /// stream with the laser in use): odometry and anchors wait for it, not only `latency_s`.
+  bool feature_set_per_scan = false;
+  double max_feature_lag_s = 5.0;     ///< s of stream time to wait for an announced scan's feature set
   /// Allowance for the robot's relative drift between two observations of a tentative feature
   /// (x, y, θ std): tentatives are matched on their own, not through the filter.
   Vec3 tentative_pose_sigma = Vec3(0.05, 0.05, 0.02);
@@ -87,6 +94,7 @@ struct FeatureSlamStats {
   long tentative_started = 0, promoted = 0, tentative_expired = 0;
   long rejected_odometry = 0, rejected_sets = 0, rejected_features = 0, failed_updates = 0;
   long jcbb_budget_exhausted = 0;
+  long gave_up_waiting = 0;  ///< inputs processed without an announced scan's feature set (max_feature_lag_s)
   std::map<std::string, long> reject_reasons;
   double update_seconds = 0.0;  ///< CPU-independent wall time spent in association + update
   long updates = 0;
@@ -173,6 +181,7 @@ class FeatureSlam {
   std::optional<OdometryReading> last_reading_;  ///< the reading the filter pose corresponds to
   int64_t last_odometry_utime_ = std::numeric_limits<int64_t>::min();
   int64_t last_feature_utime_ = std::numeric_limits<int64_t>::min();
+  int64_t last_scan_utime_ = std::numeric_limits<int64_t>::min();  ///< latest requestAnchors() time
   int64_t stream_time_ = std::numeric_limits<int64_t>::min();
   int64_t filter_time_ = std::numeric_limits<int64_t>::min();
   int64_t next_id_ = 1;

@@ -176,8 +176,12 @@ bool FeatureFusion::addOdometry(const OdometryReading& reading) {
 bool FeatureFusion::addLaserScan(const LaserScan& scan) {
   if (!validateScan(scan).empty()) return false;
   raw_scans_.push_back(normalizedScan(scan));
-  while (raw_scans_.size() > 20) raw_scans_.pop_front();
   observeTime(scan.utime);
+  // Kept as long as a late laser set may still ask for its raw scan.
+  const int64_t keep_from = stream_time_ - seconds(params_.max_laser_lag_s + params_.laser_wait_s);
+  while (raw_scans_.size() > 20 && raw_scans_.front().utime < keep_from) raw_scans_.pop_front();
+  if (params_.use_laser && (laser_sets_due_.empty() || scan.utime > laser_sets_due_.back()))
+    laser_sets_due_.push_back(scan.utime);
   process(false);
   return true;
 }
@@ -190,6 +194,7 @@ bool FeatureFusion::addLaserFeatures(const FeatureSet& laser_features) {
     return false;
   }
   ++stats_.laser_sets;
+  while (!laser_sets_due_.empty() && laser_sets_due_.front() <= laser_features.utime) laser_sets_due_.pop_front();
   pending_laser_.push_back(laser_features);
   observeTime(laser_features.utime);
   process(false);
@@ -224,6 +229,14 @@ bool FeatureFusion::laserReady(const FeatureSet& laser) const {
   // features come from another process and reach this stage after the sonar cycles of their own
   // time, offline before them, and both must fuse the same cycles.
   return !params_.use_sonar || stream_time_ - laser.utime >= seconds(params_.sonar_wait_s);
+}
+
+bool FeatureFusion::laserSetDue(int64_t until) {
+  while (!laser_sets_due_.empty() && stream_time_ - laser_sets_due_.front() > seconds(params_.max_laser_lag_s)) {
+    laser_sets_due_.pop_front();
+    ++stats_.missing_laser_sets;
+  }
+  return !laser_sets_due_.empty() && laser_sets_due_.front() <= until;
 }
 
 void FeatureFusion::process(bool flushing) {
@@ -266,9 +279,11 @@ void FeatureFusion::process(bool flushing) {
     }
     if (pending_sonar_.empty()) return;
     const SonarScan& s = pending_sonar_.front();
-    // With the laser in use, a cycle waits a while for a laser set to fuse with; without the
-    // laser, cycles of one time stamp go out together once time has moved past it.
-    const bool waited = params_.use_laser ? stream_time_ - s.utime >= seconds(params_.laser_wait_s)
+    // With the laser in use, a cycle waits a while for a laser set to fuse with, and for the set
+    // of every raw scan near it already received, however late; without the laser, cycles of one
+    // time stamp go out together once time has moved past it.
+    const bool waited = params_.use_laser ? stream_time_ - s.utime >= seconds(params_.laser_wait_s) &&
+                                                !laserSetDue(s.utime + offset)
                                           : stream_time_ > s.utime;
     if (!flushing && !waited) return;
     if (params_.use_laser) {

@@ -12,7 +12,8 @@
 // FeatureFusion turns the LASER_FEATURES, SONAR, LASER and ODOMETRY streams into one FEATURES
 // stream in the base frame: each laser feature set waits sonar_wait_s of stream time for the
 // sonar cycles around its time (stream time alone decides, so that the order in which the
-// streams happen to arrive changes nothing), the sonar features are moved to the laser scan's time with the
+// streams happen to arrive changes nothing; a sonar cycle near a raw scan already received waits
+// for that scan's laser set, however late the features stage is), the sonar features are moved to the laser scan's time with the
 // odometry (and its covariance), checked against the raw laser scan (sonar_selection.hpp), and
 // fused. Sonar cycles with no laser scan near them are passed on alone, so sonar information is
 // never lost; output is always in time order.
@@ -76,6 +77,9 @@ struct FeatureFusionParams {
   double max_sonar_offset_s = 0.06;  ///< sonar cycles this close to a laser scan are fused with it
   double sonar_wait_s = 0.15;        ///< a laser set waits this long (stream time) for sonar cycles
   double laser_wait_s = 0.3;         ///< a sonar cycle waits this long for a laser set
+  /// A sonar cycle near a raw scan already received waits for that scan's laser set however late
+  /// it comes (a slow features stage), up to this long (stream time) for a stalled one.
+  double max_laser_lag_s = 5.0;
   double unknown_speed = 0.6;        ///< m/s: bound on motion between stamps when odometry is missing
   double unknown_turn_rate = 1.0;    ///< rad/s
   OdometryModelParams odometry;
@@ -85,6 +89,7 @@ struct FeatureFusionStats {
   long laser_sets = 0, sonar_scans = 0, output_sets = 0;
   long late = 0;                 ///< inputs older than what was already emitted
   long uncompensated = 0;        ///< sonar cycles moved without odometry (motion bound used)
+  long missing_laser_sets = 0;   ///< raw scans whose laser set had not come after max_laser_lag_s
   SonarFeatureCounts sonar;
   SelectionCounts selection;
   FusionCounts fusion;
@@ -115,6 +120,8 @@ class FeatureFusion {
   void emitLaser(const FeatureSet& laser, const std::vector<SonarScan>& sonar);
   void emit(FeatureSet set);
   bool laserReady(const FeatureSet& laser) const;
+  /// True while a raw scan within `until` still has its laser set to come.
+  bool laserSetDue(int64_t until);
   /// Sonar features of a scan, in the base frame at time `utime`.
   FeatureSet sonarAt(const SonarScan& scan, int64_t utime);
   const LaserScan* rawScanAt(int64_t utime) const;
@@ -124,6 +131,7 @@ class FeatureFusion {
   std::deque<FeatureSet> pending_laser_;
   std::deque<SonarScan> pending_sonar_;
   std::deque<LaserScan> raw_scans_;  ///< normalised
+  std::deque<int64_t> laser_sets_due_;  ///< raw scans received whose laser set has not come yet
   std::vector<FeatureSet> ready_;
   int64_t stream_time_ = std::numeric_limits<int64_t>::min();
   int64_t emitted_until_ = std::numeric_limits<int64_t>::min();

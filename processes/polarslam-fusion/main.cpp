@@ -42,7 +42,12 @@ int main(int argc, char** argv) {
     ProcessContext context("polarslam-fusion", process_options);
     FeatureFusion fusion(cfg.fusion);
     int64_t out_seq = 0;
+    long missing_told = 0;
     auto publishReady = [&] {
+      if (const long missing = fusion.stats().missing_laser_sets; missing > missing_told) {
+        if (missing_told == 0) std::cerr << "polarslam-fusion: went on without a scan's laser set (max_laser_lag_s); is polarslam-features running?\n";
+        missing_told = missing;
+      }
       for (FeatureSet& set : fusion.takeReady()) {
         set.seq = out_seq++;
         context.publish(out_channel, toLcm(set));

@@ -6,9 +6,11 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 
 #include "eval/ate.hpp"
 #include "pipeline/feature_slam_estimator.hpp"
@@ -69,15 +71,20 @@ struct SimulatedRun : SimSink {
   std::vector<OdometryReading> odometry;
   std::vector<PoseStamped> truth;
   std::vector<std::function<void(Estimator&)>> events;
+  enum class Kind { Laser, Sonar, Odometry };
+  std::vector<std::pair<Kind, size_t>> order;  ///< every message: its kind and index in its vector
   void onLaser(const LaserScan& s) override {
+    order.emplace_back(Kind::Laser, scans.size());
     scans.push_back(s);
     events.push_back([s](Estimator& e) { e.onLaser(s); });
   }
   void onSonar(const SonarScan& s) override {
+    order.emplace_back(Kind::Sonar, sonar.size());
     sonar.push_back(s);
     events.push_back([s](Estimator& e) { e.onSonar(s); });
   }
   void onOdometry(const OdometryReading& o) override {
+    order.emplace_back(Kind::Odometry, odometry.size());
     odometry.push_back(o);
     events.push_back([o](Estimator& e) { e.onOdometry(o); });
   }
@@ -151,6 +158,119 @@ TEST(FeatureSlamEstimator, FinalTrajectoryIsRegeneratedInTheFinalMapOnePosePerSc
   for (size_t i = 0; i < online.size(); ++i)
     moved = std::max(moved, (online[i].pose.translation() - final_poses[i].pose.translation()).norm());
   EXPECT_GT(moved, 1e-4);
+}
+
+/// Messages that reach a stage `lag_us` of stream time after their own stamp, as from a process
+/// that falls behind.
+class LaggingLink {
+ public:
+  explicit LaggingLink(int64_t lag_us) : lag_us_(lag_us) {}
+  void send(const FeatureSet& set) { queue_.push_back(set); }
+  /// Hands over everything due by stream time `now` (all of it when `now` is the end).
+  template <typename Deliver>
+  void release(int64_t now, Deliver deliver) {
+    while (!queue_.empty() && queue_.front().utime + lag_us_ <= now) {
+      const FeatureSet set = std::move(queue_.front());
+      queue_.pop_front();
+      deliver(set);
+    }
+  }
+
+ private:
+  int64_t lag_us_;
+  std::deque<FeatureSet> queue_;
+};
+
+/// The three EKF stages run apart, as the live processes: LASER, SONAR and ODOMETRY reach each
+/// stage at once, LASER_FEATURES reach the fusion and FEATURES the EKF `lag_s` late. Returns the
+/// scan anchors' poses (the online trajectory).
+std::vector<PoseStamped> runStagesApart(const SimulatedRun& run, const FeaturePipelineConfig& config, double lag_s,
+                                        FeatureSlamStats* slam_stats = nullptr, FeatureFusionStats* fusion_stats = nullptr) {
+  LaserFeatureStage features(config);
+  FeatureFusion fusion(config.fusion);
+  FeatureSlam slam(config.slam);
+  const auto lag_us = static_cast<int64_t>(lag_s * 1e6);
+  LaggingLink laser_features(lag_us), fused(lag_us);
+  std::vector<PoseStamped> poses;
+  auto pass = [&](int64_t now) {
+    laser_features.release(now, [&](const FeatureSet& set) { fusion.addLaserFeatures(set); });
+    for (const FeatureSet& set : fusion.takeReady()) fused.send(set);
+    fused.release(now, [&](const FeatureSet& set) { slam.addFeatures(set); });
+    for (const ScanAnchors& a : slam.takeAnchors()) poses.push_back(a.pose);
+  };
+  for (const auto& [kind, i] : run.order) {
+    int64_t now = 0;
+    switch (kind) {
+      case SimulatedRun::Kind::Odometry:
+        features.addOdometry(run.odometry[i]);
+        fusion.addOdometry(run.odometry[i]);
+        slam.addOdometry(run.odometry[i]);
+        now = run.odometry[i].utime;
+        break;
+      case SimulatedRun::Kind::Laser:
+        slam.requestAnchors(run.scans[i].utime);
+        fusion.addLaserScan(run.scans[i]);
+        if (config.fusion.use_laser) laser_features.send(features.extract(run.scans[i]));
+        now = run.scans[i].utime;
+        break;
+      case SimulatedRun::Kind::Sonar:
+        features.addSonar(run.sonar[i]);
+        if (config.fusion.use_sonar) fusion.addSonar(run.sonar[i]);
+        now = run.sonar[i].utime;
+        break;
+    }
+    pass(now);
+  }
+  pass(std::numeric_limits<int64_t>::max());
+  fusion.flush();
+  pass(std::numeric_limits<int64_t>::max());
+  slam.flush();
+  pass(std::numeric_limits<int64_t>::max());
+  if (slam_stats) *slam_stats = slam.stats();
+  if (fusion_stats) *fusion_stats = fusion.stats();
+  return poses;
+}
+
+double largestDifference(const std::vector<PoseStamped>& a, const std::vector<PoseStamped>& b) {
+  if (a.size() != b.size()) return std::numeric_limits<double>::infinity();
+  double worst = 0.0;
+  for (size_t i = 0; i < a.size(); ++i)
+    worst = std::max({worst, (a[i].pose.translation() - b[i].pose.translation()).norm(),
+                      std::abs(wrapAngle(a[i].pose.theta - b[i].pose.theta))});
+  return worst;
+}
+
+// Live, LASER_FEATURES and FEATURES come from other processes, which fall behind on a loaded or
+// slow machine (the sanitizer build, a busy robot computer): a scan's sets wait for them however
+// late, so a lag of seconds gives the one-process result; only a stalled peer (no set within
+// max_*_lag_s) makes the stages go on without it, counted.
+TEST(FeatureSlamEstimator, StagesApartGiveTheOneProcessResultWhateverTheLagOfTheFeatureStreams) {
+  const SimulatedRun& run = officeRun();
+  const FeaturePipelineConfig config = loadFeaturePipelineConfig(source("config/ekf.yaml"), SlamSensors::Fused);
+  FeatureSlamEstimator ekf(config);
+  for (const auto& event : run.events) event(ekf);
+  nlohmann::json report;
+  ekf.finish("", report);
+  const std::vector<PoseStamped>& one_process = ekf.onlineTrajectory();
+  ASSERT_EQ(one_process.size(), run.scans.size());
+  for (const double lag_s : {0.0, 0.1, 0.5, 2.0}) {
+    FeatureSlamStats slam_stats;
+    FeatureFusionStats fusion_stats;
+    EXPECT_EQ(largestDifference(runStagesApart(run, config, lag_s, &slam_stats, &fusion_stats), one_process), 0.0)
+        << "lag " << lag_s << " s";
+    EXPECT_EQ(slam_stats.rejected_sets, 0) << "lag " << lag_s << " s";
+    EXPECT_EQ(fusion_stats.late, 0) << "lag " << lag_s << " s";
+    EXPECT_EQ(slam_stats.gave_up_waiting + fusion_stats.missing_laser_sets, 0) << "lag " << lag_s << " s";
+  }
+  // Beyond max_*_lag_s the peer counts as stalled: the stages go on without its sets and say so.
+  FeaturePipelineConfig impatient = config;
+  impatient.slam.max_feature_lag_s = impatient.fusion.max_laser_lag_s = 0.5;
+  FeatureSlamStats slam_stats;
+  FeatureFusionStats fusion_stats;
+  EXPECT_GT(largestDifference(runStagesApart(run, impatient, 2.0, &slam_stats, &fusion_stats), one_process), 0.0);
+  EXPECT_GT(slam_stats.gave_up_waiting, 0);
+  EXPECT_GT(fusion_stats.missing_laser_sets, 0);
+  EXPECT_GT(slam_stats.rejected_sets + fusion_stats.late, 0);
 }
 
 TEST(RecordedEstimator, AnchorsAndTheLastMapGiveTheOfflineFinalTrajectory) {
