@@ -1,6 +1,7 @@
 #include "pipeline/estimator.hpp"
 
 #include <filesystem>
+#include <map>
 
 #include "pipeline/feature_slam_estimator.hpp"
 #include "pipeline/g2o_export.hpp"
@@ -62,6 +63,8 @@ void RecordedEstimator::onPoseGraph(const PoseGraph& graph) {
   ++graphs_;
 }
 
+void RecordedEstimator::onFinalPath(const std::vector<PoseStamped>& path) { final_path_ = path; }
+
 void RecordedEstimator::finish(const std::string& out_dir, nlohmann::json& report) {
   if (graph_ && !out_dir.empty()) writeG2o((std::filesystem::path(out_dir) / "graph.g2o").string(), *graph_);
   std::string final_source = "published poses (nothing to re-place them with)";
@@ -74,6 +77,13 @@ void RecordedEstimator::finish(const std::string& out_dir, nlohmann::json& repor
   } else if (!anchored_.empty() && graph_) {
     final_ = reanchor(anchored_, *graph_, &missing_nodes);
     final_source = "anchored poses re-placed by the last pose graph";
+  } else if (final_path_) {  // localising: no graph goes out, the final trajectory does on exit
+    // A process resumed from a snapshot knows the scans since: the earlier ones keep their poses.
+    std::map<int64_t, Pose2> placed;
+    for (const PoseStamped& p : *final_path_) placed[p.utime] = p.pose;
+    for (PoseStamped& p : final_)
+      if (const auto it = placed.find(p.utime); it != placed.end()) p.pose = it->second;
+    final_source = "the final path published on exit";
   }
   finished_ = true;
   report["recorded"] = {{"published_poses", published_.size()},
@@ -81,6 +91,7 @@ void RecordedEstimator::finish(const std::string& out_dir, nlohmann::json& repor
                         {"anchored_poses", anchored_.size()},
                         {"maps", maps_},
                         {"graphs", graphs_},
+                        {"final_path_poses", final_path_ ? final_path_->size() : 0},
                         {"anchors_without_node", missing_nodes},
                         {"final_from", final_source},
                         {"out_of_order_dropped", out_of_order_}};

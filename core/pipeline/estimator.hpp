@@ -33,6 +33,8 @@ class Estimator {
   virtual void onFeatureMap(const FeatureMap&) {}
   virtual void onAnchoredPose(const AnchoredPose&) {}
   virtual void onPoseGraph(const PoseGraph&) {}
+  /// A live run's final trajectory, one pose per scan (PSM_SLAM_PATH).
+  virtual void onFinalPath(const std::vector<PoseStamped>&) {}
   /// Robot base pose estimates in the map frame (= the robot's starting frame), in time order:
   /// the final estimate, after finish() (later information, loop closures, optimisation included).
   virtual const std::vector<PoseStamped>& trajectory() const = 0;
@@ -76,7 +78,8 @@ class LaserOdometryEstimator : public Estimator {
 /// PSM_SLAM_POSE, i.e. the poses published at scan time (falling back to any recorded pose_t
 /// channel). Final trajectory: the EKF's scan anchors regenerated in its last SLAM_MAP, or PSM
 /// SLAM's anchored poses re-placed by its last PSM_SLAM_GRAPH — the same computation as the
-/// offline estimators'. Messages older than the previous one of their kind are dropped and
+/// offline estimators' — or, localising (no graph goes out), the PSM_SLAM_PATH published on exit,
+/// the offline estimator's own final trajectory. Messages older than the previous one of their kind are dropped and
 /// counted (a logger can record out of order).
 class RecordedEstimator : public Estimator {
  public:
@@ -86,6 +89,7 @@ class RecordedEstimator : public Estimator {
   void onFeatureMap(const FeatureMap& map) override;
   void onAnchoredPose(const AnchoredPose& pose) override;
   void onPoseGraph(const PoseGraph& graph) override;
+  void onFinalPath(const std::vector<PoseStamped>& path) override;
   const std::vector<PoseStamped>& trajectory() const override { return finished_ ? final_ : online_; }
   const std::vector<PoseStamped>& onlineTrajectory() const override { return online_; }
   void finish(const std::string& out_dir, nlohmann::json& report) override;
@@ -98,6 +102,7 @@ class RecordedEstimator : public Estimator {
   std::vector<AnchoredPose> anchored_;
   std::optional<FeatureMap> map_;
   std::optional<PoseGraph> graph_;
+  std::optional<std::vector<PoseStamped>> final_path_;
   int64_t last_pose_ = INT64_MIN, last_anchors_ = INT64_MIN, last_anchored_ = INT64_MIN;
   long out_of_order_ = 0, maps_ = 0, graphs_ = 0;
   bool finished_ = false;

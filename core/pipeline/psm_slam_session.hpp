@@ -58,6 +58,8 @@ class PsmSlamSession {
   void saveMapNow() const;
   /// At the end: the final optimisation and, with --save-map, the map saved. The report figures.
   nlohmann::json finish();
+  /// After finish(): one pose per scan, in the map frame (what trajectory.tum holds offline).
+  const std::vector<PoseStamped>& finalTrajectory() const { return estimator_->trajectory(); }
 
   /// Crash recovery: whether there is state to snapshot (mapping, or localising; not while a
   /// continued map's start is still searched).

@@ -49,6 +49,26 @@ polarslam::path_t toLcmPath(const std::vector<Vec2>& waypoints, int64_t goal_uti
   return msg;
 }
 
+polarslam::path_t toLcmPath(const std::vector<PoseStamped>& trajectory, int64_t utime, int64_t seq) {
+  polarslam::path_t msg = emptyPath(utime, seq);
+  for (const PoseStamped& p : trajectory) append(msg, p.utime, p.pose, polarslam::path_t::FINAL);
+  msg.num_poses = static_cast<int32_t>(msg.x.size());
+  return msg;
+}
+
+std::string fromLcm(const polarslam::path_t& msg, std::vector<PoseStamped>& poses) {
+  std::vector<Vec2> positions;
+  if (std::string why = fromLcm(msg, positions); !why.empty()) return why;
+  std::vector<PoseStamped> out(positions.size());
+  for (size_t i = 0; i < positions.size(); ++i) {
+    if (!std::isfinite(msg.theta[i])) return "path: non-finite heading";
+    out[i].utime = msg.pose_utime[i];
+    out[i].pose = Pose2(positions[i].x(), positions[i].y(), msg.theta[i]);
+  }
+  poses = std::move(out);
+  return {};
+}
+
 std::string fromLcm(const polarslam::path_t& msg, std::vector<Vec2>& positions) {
   if (msg.num_poses < 0 || msg.num_poses > 1000000) return "path: bad num_poses";
   const auto n = static_cast<size_t>(msg.num_poses);

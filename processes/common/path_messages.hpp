@@ -15,7 +15,11 @@ polarslam::path_t toLcmPath(const std::vector<int64_t>& scan_utimes, const std::
 /// PLANNED_PATH: waypoints in the map frame; theta is the direction of travel.
 polarslam::path_t toLcmPath(const std::vector<Vec2>& waypoints, int64_t goal_utime, bool goal_exact, int64_t utime,
                             int64_t seq);
+/// PSM_SLAM_PATH: a run's final trajectory, one pose per scan (source FINAL).
+polarslam::path_t toLcmPath(const std::vector<PoseStamped>& trajectory, int64_t utime, int64_t seq);
 /// The path's positions, checked: equal array lengths, finite values, at most 1e6 poses.
 std::string fromLcm(const polarslam::path_t& msg, std::vector<Vec2>& positions);
+/// The path's stamped poses (no covariance), checked as above and for finite headings.
+std::string fromLcm(const polarslam::path_t& msg, std::vector<PoseStamped>& poses);
 
 }  // namespace polarslam

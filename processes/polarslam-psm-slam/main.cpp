@@ -2,7 +2,8 @@
 // frame "map", one per scan, with covariance), PSM_SLAM_ANCHORS (anchored_pose_t, the same pose
 // relative to its reference scan) and PSM_SLAM_GRAPH (pose_graph_t: after every optimisation,
 // when the graph has otherwise changed at most every --graph-period seconds, and once more on
-// exit after a final optimisation). With --save-map M it saves its map (core/map/map_store.hpp)
+// exit after a final optimisation) and, on exit, PSM_SLAM_PATH (path_t: the final trajectory, one
+// pose per scan, what `polarslam run` writes to trajectory.tum). With --save-map M it saves its map (core/map/map_store.hpp)
 // on every SAVE_MAP request (map_request_t) and on exit; with --load-map M it localises in a saved
 // map (--mode localize: poses only, no anchors or graph) or maps on from it (--mode continue). A
 // thin shell over core/pipeline/psm_slam_session.hpp, what `polarslam run --pipeline psm-slam`
@@ -18,6 +19,7 @@
 #include "pipeline/pipelines.hpp"
 #include "common/lcm_convert.hpp"
 #include "common/process_context.hpp"
+#include "common/path_messages.hpp"
 #include "common/pose_graph_message.hpp"
 #include "common/saved_map_options.hpp"
 #include "map/map_store.hpp"
@@ -31,7 +33,7 @@ namespace {
 
 struct Channels {
   std::string laser = "LASER", odometry = "ODOMETRY", pose = "PSM_SLAM_POSE", anchors = "PSM_SLAM_ANCHORS",
-              graph = "PSM_SLAM_GRAPH", save_map = "SAVE_MAP";
+              graph = "PSM_SLAM_GRAPH", path = "PSM_SLAM_PATH", save_map = "SAVE_MAP";
 };
 
 class GraphPublisher {
@@ -118,6 +120,7 @@ int main(int argc, char** argv) {
   app.add_option("--pose-channel", channels.pose, "channel of the robot poses (pose_t)")->capture_default_str();
   app.add_option("--anchors-channel", channels.anchors, "poses relative to their reference scan")->capture_default_str();
   app.add_option("--graph-channel", channels.graph, "channel of the pose graph (pose_graph_t)")->capture_default_str();
+  app.add_option("--path-channel", channels.path, "channel of the final trajectory, on exit (path_t)")->capture_default_str();
   std::string save_map;
   app.add_option("--save-map", save_map,
                  "save the map (pose graph, reference scans, grid, parameters) to this folder on exit and on "
@@ -214,6 +217,7 @@ int main(int argc, char** argv) {
     }
     graph.changed();
     publishGraph(true);
+    context.publish(channels.path, toLcmPath(session.finalTrajectory(), last_utime, 0));
     std::cerr << "polarslam-psm-slam: " << exitSummary(report) << "\n";
     if (!saved) return 1;
   } catch (const std::exception& e) {

@@ -185,7 +185,8 @@ void plotErrorOverTime(const std::string& path, const std::vector<PoseStamped>& 
 }
 
 /// The channels a recorded live run published next to its poses: EKF SLAM (SLAM_POSE) also
-/// SCAN_ANCHORS and SLAM_MAP, PSM SLAM (PSM_SLAM_POSE) also PSM_SLAM_ANCHORS and PSM_SLAM_GRAPH.
+/// SCAN_ANCHORS and SLAM_MAP, PSM SLAM (PSM_SLAM_POSE) also PSM_SLAM_ANCHORS, PSM_SLAM_GRAPH and
+/// PSM_SLAM_PATH.
 void addRecordedChannels(SensorChannelNames& c) {
   if (c.estimated_pose == "SLAM_POSE") {
     if (c.scan_anchors.empty()) c.scan_anchors = "SCAN_ANCHORS";
@@ -193,6 +194,7 @@ void addRecordedChannels(SensorChannelNames& c) {
   } else if (c.estimated_pose == "PSM_SLAM_POSE") {
     if (c.anchored_poses.empty()) c.anchored_poses = "PSM_SLAM_ANCHORS";
     if (c.pose_graph.empty()) c.pose_graph = "PSM_SLAM_GRAPH";
+    if (c.final_path.empty()) c.final_path = "PSM_SLAM_PATH";
   }
 }
 
@@ -258,6 +260,7 @@ void runPipeline(RunOptions o) {
   visitor.slam_map = [&](const FeatureMap& m) { estimator->onFeatureMap(m); };
   visitor.anchored_pose = [&](const AnchoredPose& p) { estimator->onAnchoredPose(p); };
   visitor.pose_graph = [&](const PoseGraph& g) { estimator->onPoseGraph(g); };
+  visitor.final_path = [&](const std::vector<PoseStamped>& path) { estimator->onFinalPath(path); };
   const SensorLogSummary summary = visitSensorLog(o.log, o.channels, visitor, "run " + o.pipeline,
                                                   {static_cast<int64_t>(o.max_time_jump_s * 1e6), 3});
   nlohmann::json report;

@@ -22,6 +22,7 @@ struct SensorChannelNames {
   /// What a recorded live run published besides poses (empty: none): the EKF's scan_anchors_t
   /// and slam_map_t, PSM SLAM's anchored_pose_t and pose_graph_t.
   std::string scan_anchors, slam_map, anchored_poses, pose_graph;
+  std::string final_path;  ///< path_t: a run's final trajectory published on exit (empty: none)
 };
 
 struct SensorLogVisitor {
@@ -34,6 +35,7 @@ struct SensorLogVisitor {
   std::function<void(const FeatureMap&)> slam_map;
   std::function<void(const AnchoredPose&)> anchored_pose;
   std::function<void(const PoseGraph&)> pose_graph;
+  std::function<void(const std::vector<PoseStamped>&)> final_path;
 };
 
 /// The last PROCESS_STATUS of one process in a recorded live run.

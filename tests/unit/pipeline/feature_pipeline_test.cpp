@@ -11,6 +11,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <random>
 
 #include "eval/ate.hpp"
 #include "pipeline/feature_slam_estimator.hpp"
@@ -164,33 +165,43 @@ TEST(FeatureSlamEstimator, FinalTrajectoryIsRegeneratedInTheFinalMapOnePosePerSc
 /// that falls behind.
 class LaggingLink {
  public:
-  explicit LaggingLink(int64_t lag_us) : lag_us_(lag_us) {}
-  void send(const FeatureSet& set) { queue_.push_back(set); }
+  /// Each message is due `lag_us` after its stamp, plus up to `jitter_us` more (never before the
+  /// one sent ahead of it).
+  LaggingLink(int64_t lag_us, int64_t jitter_us = 0, uint64_t seed = 1) : lag_us_(lag_us), jitter_us_(jitter_us), rng_(seed) {}
+  void send(const FeatureSet& set) {
+    int64_t due = set.utime + lag_us_;
+    if (jitter_us_ > 0) due += std::uniform_int_distribution<int64_t>(0, jitter_us_)(rng_);
+    last_due_ = std::max(last_due_, due);
+    queue_.push_back({last_due_, set});
+  }
   /// Hands over everything due by stream time `now` (all of it when `now` is the end).
   template <typename Deliver>
   void release(int64_t now, Deliver deliver) {
-    while (!queue_.empty() && queue_.front().utime + lag_us_ <= now) {
-      const FeatureSet set = std::move(queue_.front());
+    while (!queue_.empty() && queue_.front().first <= now) {
+      const FeatureSet set = std::move(queue_.front().second);
       queue_.pop_front();
       deliver(set);
     }
   }
 
  private:
-  int64_t lag_us_;
-  std::deque<FeatureSet> queue_;
+  int64_t lag_us_, jitter_us_;
+  std::mt19937_64 rng_;
+  int64_t last_due_ = std::numeric_limits<int64_t>::min();
+  std::deque<std::pair<int64_t, FeatureSet>> queue_;
 };
 
 /// The three EKF stages run apart, as the live processes: LASER, SONAR and ODOMETRY reach each
 /// stage at once, LASER_FEATURES reach the fusion and FEATURES the EKF `lag_s` late. Returns the
 /// scan anchors' poses (the online trajectory).
 std::vector<PoseStamped> runStagesApart(const SimulatedRun& run, const FeaturePipelineConfig& config, double lag_s,
-                                        FeatureSlamStats* slam_stats = nullptr, FeatureFusionStats* fusion_stats = nullptr) {
+                                        FeatureSlamStats* slam_stats = nullptr, FeatureFusionStats* fusion_stats = nullptr,
+                                        double jitter_s = 0.0, uint64_t seed = 1) {
   LaserFeatureStage features(config);
   FeatureFusion fusion(config.fusion);
   FeatureSlam slam(config.slam);
-  const auto lag_us = static_cast<int64_t>(lag_s * 1e6);
-  LaggingLink laser_features(lag_us), fused(lag_us);
+  const auto lag_us = static_cast<int64_t>(lag_s * 1e6), jitter_us = static_cast<int64_t>(jitter_s * 1e6);
+  LaggingLink laser_features(lag_us, jitter_us, seed), fused(lag_us / 2, jitter_us, seed + 1);
   std::vector<PoseStamped> poses;
   auto pass = [&](int64_t now) {
     laser_features.release(now, [&](const FeatureSet& set) { fusion.addLaserFeatures(set); });
@@ -261,6 +272,13 @@ TEST(FeatureSlamEstimator, StagesApartGiveTheOneProcessResultWhateverTheLagOfThe
     EXPECT_EQ(slam_stats.rejected_sets, 0) << "lag " << lag_s << " s";
     EXPECT_EQ(fusion_stats.late, 0) << "lag " << lag_s << " s";
     EXPECT_EQ(slam_stats.gave_up_waiting + fusion_stats.missing_laser_sets, 0) << "lag " << lag_s << " s";
+  }
+  for (uint64_t seed = 1; seed <= 5; ++seed) {
+    FeatureSlamStats slam_stats;
+    FeatureFusionStats fusion_stats;
+    EXPECT_EQ(largestDifference(runStagesApart(run, config, 0.2, &slam_stats, &fusion_stats, 1.0, seed), one_process), 0.0)
+        << "lag 0.2 s + up to 1 s, seed " << seed;
+    EXPECT_EQ(slam_stats.rejected_sets + fusion_stats.late, 0) << "seed " << seed;
   }
   // Beyond max_*_lag_s the peer counts as stalled: the stages go on without its sets and say so.
   FeaturePipelineConfig impatient = config;
