@@ -79,8 +79,8 @@ class LaserOdometryEstimator : public Estimator {
 /// channel). Final trajectory: the EKF's scan anchors regenerated in its last SLAM_MAP, or PSM
 /// SLAM's anchored poses re-placed by its last PSM_SLAM_GRAPH — the same computation as the
 /// offline estimators' — or, localising (no graph goes out), the PSM_SLAM_PATH published on exit,
-/// the offline estimator's own final trajectory. Messages older than the previous one of their kind are dropped and
-/// counted (a logger can record out of order).
+/// the offline estimator's own final trajectory. Messages older than the previous one of their
+/// kind are dropped and counted (a logger can record out of order).
 class RecordedEstimator : public Estimator {
  public:
   std::string name() const override { return "recorded"; }

@@ -229,12 +229,12 @@ void FeatureSlam::flush() { process(true); }
 
 void FeatureSlam::process(bool flushing) {
   const int64_t latency = micros(params_.latency_s), max_lag = micros(params_.max_feature_lag_s);
-  // True once nothing older than t can still come on the feature stream: `latency_s` for sets
-  // nobody announced, and an announced scan's set is waited for (see feature_set_per_scan).
-  auto waited = [&](int64_t t) {
-    if (flushing) return true;
+  auto waited = [&](int64_t t) { return flushing || stream_time_ - t >= latency; };
+  // Whether a feature set older than t can no longer come: `latency_s` for sets nobody announced;
+  // an announced scan's set (feature_set_per_scan) is waited for up to max_feature_lag_s.
+  auto featureStreamPast = [&](int64_t t) {
     const bool scan_set_due = params_.feature_set_per_scan && last_scan_utime_ > last_feature_utime_;
-    if (!scan_set_due) return stream_time_ - t >= latency;
+    if (flushing || !scan_set_due) return waited(t);
     if (stream_time_ - t < max_lag) return false;
     ++stats_.gave_up_waiting;
     return true;
@@ -247,7 +247,7 @@ void FeatureSlam::process(bool flushing) {
     if (t == kNever) return;
     if (t_odo == t) {  // odometry first on ties: a feature set at t sees the motion up to t
       // Later feature sets cannot be older than the newest one received.
-      if (!(last_feature_utime_ >= t_odo || waited(t_odo))) return;
+      if (!(last_feature_utime_ >= t_odo || featureStreamPast(t_odo))) return;
       predictTo(odometry_queue_.front());
       poses_.push_back({t_odo, state_.pose(), state_.poseCovariance()});
       odometry_queue_.pop_front();
@@ -261,7 +261,7 @@ void FeatureSlam::process(bool flushing) {
       processFeatures(set);
       continue;
     }
-    if (!((!odometry_queue_.empty() && last_feature_utime_ >= t_anchor) || waited(t_anchor))) return;
+    if (!((!odometry_queue_.empty() && last_feature_utime_ >= t_anchor) || featureStreamPast(t_anchor))) return;
     advanceTo(t_anchor);
     anchor_queue_.pop_front();
     emitAnchors(t_anchor);

@@ -25,9 +25,9 @@
 // processed once odometry reaches its time stamp (or `latency_s` of stream time has passed), so
 // feature sets may lag odometry by up to `latency_s`. With `feature_set_per_scan` (the laser feeds
 // the feature stream), every scan announced by requestAnchors() has a feature set on its way:
-// until it arrives nothing later is processed, however far the stream it comes on lags (a slow
-// or loaded machine), up to `max_feature_lag_s` for a stalled peer. Nothing here throws on bad input: it is
-// counted in stats() and skipped.
+// until it arrives no later odometry or anchors are processed, however far the stream it comes
+// on lags (a slow or loaded machine), up to `max_feature_lag_s` for a stalled peer. Nothing here
+// throws on bad input: it is counted in stats() and skipped.
 #include <cstdint>
 #include <deque>
 #include <limits>

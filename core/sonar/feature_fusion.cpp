@@ -180,7 +180,7 @@ bool FeatureFusion::addLaserScan(const LaserScan& scan) {
   // Kept as long as a late laser set may still ask for its raw scan.
   const int64_t keep_from = stream_time_ - seconds(params_.max_laser_lag_s + params_.laser_wait_s);
   while (raw_scans_.size() > 20 && raw_scans_.front().utime < keep_from) raw_scans_.pop_front();
-  if (params_.use_laser && (laser_sets_due_.empty() || scan.utime > laser_sets_due_.back()))
+  if (params_.use_laser && params_.use_sonar && (laser_sets_due_.empty() || scan.utime > laser_sets_due_.back()))
     laser_sets_due_.push_back(scan.utime);
   process(false);
   return true;
@@ -231,15 +231,19 @@ bool FeatureFusion::laserReady(const FeatureSet& laser) const {
   return !params_.use_sonar || stream_time_ - laser.utime >= seconds(params_.sonar_wait_s);
 }
 
-bool FeatureFusion::laserSetDue(int64_t until) {
+void FeatureFusion::dropStalledLaserSets() {
   while (!laser_sets_due_.empty() && stream_time_ - laser_sets_due_.front() > seconds(params_.max_laser_lag_s)) {
     laser_sets_due_.pop_front();
     ++stats_.missing_laser_sets;
   }
+}
+
+bool FeatureFusion::laserSetDue(int64_t until) const {
   return !laser_sets_due_.empty() && laser_sets_due_.front() <= until;
 }
 
 void FeatureFusion::process(bool flushing) {
+  dropStalledLaserSets();
   const int64_t offset = seconds(params_.max_sonar_offset_s);
   while (true) {
     if (!pending_laser_.empty()) {

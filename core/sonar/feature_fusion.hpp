@@ -89,7 +89,7 @@ struct FeatureFusionStats {
   long laser_sets = 0, sonar_scans = 0, output_sets = 0;
   long late = 0;                 ///< inputs older than what was already emitted
   long uncompensated = 0;        ///< sonar cycles moved without odometry (motion bound used)
-  long missing_laser_sets = 0;   ///< raw scans whose laser set had not come after max_laser_lag_s
+  long missing_laser_sets = 0;   ///< raw scans whose laser set had not come after max_laser_lag_s (sonar waits on them)
   SonarFeatureCounts sonar;
   SelectionCounts selection;
   FusionCounts fusion;
@@ -121,7 +121,9 @@ class FeatureFusion {
   void emit(FeatureSet set);
   bool laserReady(const FeatureSet& laser) const;
   /// True while a raw scan within `until` still has its laser set to come.
-  bool laserSetDue(int64_t until);
+  bool laserSetDue(int64_t until) const;
+  /// Gives up on the laser sets of raw scans older than max_laser_lag_s (counted).
+  void dropStalledLaserSets();
   /// Sonar features of a scan, in the base frame at time `utime`.
   FeatureSet sonarAt(const SonarScan& scan, int64_t utime);
   const LaserScan* rawScanAt(int64_t utime) const;

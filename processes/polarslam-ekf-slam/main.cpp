@@ -48,11 +48,12 @@ int main(int argc, char** argv) {
     FeatureSlam slam(cfg.slam);
     int64_t pose_seq = 0, map_seq = 0, anchor_seq = 0, last_map_utime = 0;
     const int64_t map_period_us = static_cast<int64_t>(map_period * 1e6);
-    long stalls_told = 0;
+    bool stall_told = false;  // said once; the count is in the stats
     auto publishOutputs = [&] {
-      if (const long stalls = slam.stats().gave_up_waiting; stalls > stalls_told) {
-        if (stalls_told == 0) std::cerr << "polarslam-ekf-slam: went on without a scan's feature set (max_feature_lag_s); is polarslam-fusion running?\n";
-        stalls_told = stalls;
+      if (!stall_told && slam.stats().gave_up_waiting > 0) {
+        std::cerr << "polarslam-ekf-slam: went on without a scan's feature set (max_feature_lag_s); "
+                     "is polarslam-fusion running?\n";
+        stall_told = true;
       }
       for (const ScanAnchors& a : slam.takeAnchors()) context.publish(anchors_channel, toLcm(a, anchor_seq++));
       slam.takePoses();  // the live pose below already includes them

@@ -42,11 +42,12 @@ int main(int argc, char** argv) {
     ProcessContext context("polarslam-fusion", process_options);
     FeatureFusion fusion(cfg.fusion);
     int64_t out_seq = 0;
-    long missing_told = 0;
+    bool stall_told = false;  // said once; the count is in the stats
     auto publishReady = [&] {
-      if (const long missing = fusion.stats().missing_laser_sets; missing > missing_told) {
-        if (missing_told == 0) std::cerr << "polarslam-fusion: went on without a scan's laser set (max_laser_lag_s); is polarslam-features running?\n";
-        missing_told = missing;
+      if (!stall_told && fusion.stats().missing_laser_sets > 0) {
+        std::cerr << "polarslam-fusion: went on without a scan's laser set (max_laser_lag_s); "
+                     "is polarslam-features running?\n";
+        stall_told = true;
       }
       for (FeatureSet& set : fusion.takeReady()) {
         set.seq = out_seq++;
