@@ -104,7 +104,7 @@ nlohmann::json localizationReportJson(const MapLocalizer& localizer, double seco
           {"gate_rejections", s.gate_rejections},
           {"odometry_faults", s.odometry_faults},
           {"global_searches", s.global_searches},
-          {"global_matches", s.global_matches},
+          {"global_nodes", s.global_nodes}, {"global_unrefined", s.global_unrefined},
           {"global_ambiguous", s.global_ambiguous},
           {"global_see_through", s.global_see_through},
           {"global_unsupported", s.global_unsupported},

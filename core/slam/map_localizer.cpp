@@ -35,6 +35,15 @@ MapLocalizer::MapLocalizer(const std::vector<MapReference>& references, PsmSlamP
   }
   if (references_.empty()) throw std::invalid_argument("the map has no usable reference scan to localise against");
   field_.emplace(scans, poses, params_.psm.max_range, options_.global_fit_distance);
+  std::vector<Vec2> map_points, positions;
+  for (size_t k = 0; k < scans.size(); ++k) {
+    const Pose2 laser = poses[k] * scans[k].laser_pose;
+    for (size_t i = 0; i < scans[k].size(); ++i)
+      if (scans[k].valid(i) && scans[k].ranges[i] <= params_.psm.max_range) map_points.push_back(laser.transform(scans[k].point(i)));
+  }
+  for (const Reference& r : references_) positions.push_back(r.pose.translation());
+  correlative_.emplace(map_points, positions,
+                       CorrelativeSearchParams{options_.global_resolution, options_.global_sigma, options_.global_region_radius});
 }
 
 void MapLocalizer::setInitialPose(const Pose2& pose, const Mat3& cov) {
@@ -192,49 +201,91 @@ bool MapLocalizer::trackNewGround(const PreparedScan& scan, const Pose2& mount) 
   return true;
 }
 
-std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& raw, const PreparedScan& scan) {
-  const Pose2& mount = raw.laser_pose;
-  ++stats_.global_searches;
-  std::vector<Fix> hits;
-  const int headings = std::max(1, options_.global_headings);
-  for (size_t i = 0; i < references_.size(); ++i)
-    for (int h = 0; h < headings; ++h) {
-      ++stats_.global_matches;
-      const Pose2 guess(0.0, 0.0, wrapAngle(2.0 * M_PI * h / headings));
-      std::optional<Fix> fix = match(i, scan, mount, guess, true);
-      if (!fix || !goodFix(*fix, true)) continue;
-      fix->fit = field_->fit(raw, fix->pose);
-      if (fix->fit < options_.global_min_fit) continue;
-      if (field_->seeThrough(raw, fix->pose, options_.global_see_through_clearance) > options_.global_max_see_through) {
-        ++stats_.global_see_through;
-        continue;
-      }
-      hits.push_back(*fix);
-    }
-  if (hits.empty()) return std::nullopt;
-  // PSM's error index rates the associated readings only: a corridor matched the wrong way round
-  // can have a smaller one at half the overlap. The fit of the whole scan to the map tells them apart.
-  const auto best = std::max_element(hits.begin(), hits.end(), [](const Fix& a, const Fix& b) {
-    return a.fit < b.fit || (a.fit == b.fit && a.error_index > b.error_index);
+std::vector<Vec2> MapLocalizer::searchPoints(const LaserScan& raw) const {
+  std::vector<size_t> readings;
+  for (size_t i = 0; i < raw.size(); ++i)
+    if (raw.valid(i) && raw.ranges[i] <= params_.psm.max_range) readings.push_back(i);
+  const size_t wanted = static_cast<size_t>(std::max(1, options_.global_points));
+  const size_t n = std::min(wanted, readings.size());
+  std::vector<Vec2> points;
+  for (size_t k = 0; k < n; ++k) points.push_back(raw.laser_pose.transform(raw.point(readings[k * readings.size() / n])));
+  return points;
+}
+
+std::optional<MapLocalizer::Fix> MapLocalizer::refineGlobalHit(const Pose2& hit, const PreparedScan& scan,
+                                                               const Pose2& mount) {
+  std::vector<std::pair<double, size_t>> nearest;
+  for (size_t i = 0; i < references_.size(); ++i) {
+    const Pose2 relative = between(references_[i].pose, hit);
+    if (relative.translation().norm() <= options_.track_radius && std::abs(relative.theta) <= options_.track_heading)
+      nearest.emplace_back(relative.translation().norm() + std::abs(relative.theta), i);
+  }
+  const size_t keep = std::min(nearest.size(), static_cast<size_t>(std::max(options_.global_min_support, options_.track_candidates) + 1));
+  std::partial_sort(nearest.begin(), nearest.begin() + static_cast<long>(keep), nearest.end());
+  std::vector<Fix> fixes;
+  for (size_t k = 0; k < keep; ++k) {
+    const size_t i = nearest[k].second;
+    std::optional<Fix> fix = match(i, scan, mount, between(references_[i].pose, hit), false);
+    if (fix && goodFix(*fix, true) && isNear(hit, fix->pose, options_.global_ambiguity_distance, params_.loop_ambiguity_heading))
+      fixes.push_back(*fix);
+  }
+  if (fixes.empty()) {
+    ++stats_.global_unrefined;
+    return std::nullopt;
+  }
+  const Fix best = *std::min_element(fixes.begin(), fixes.end(),
+                                     [](const Fix& a, const Fix& b) { return a.error_index < b.error_index; });
+  const auto agree = std::count_if(fixes.begin(), fixes.end(), [&](const Fix& f) {
+    return isNear(best.pose, f.pose, options_.confirm_translation, options_.confirm_rotation);
   });
-  std::vector<size_t> supporting;
-  for (const Fix& other : hits)
-    if (isNear(best->pose, other.pose, options_.confirm_translation, options_.confirm_rotation) &&
-        std::find(supporting.begin(), supporting.end(), other.reference) == supporting.end())
-      supporting.push_back(other.reference);
-  if (supporting.size() < static_cast<size_t>(options_.global_min_support)) {
+  if (agree < std::min<long>(options_.global_min_support, static_cast<long>(references_.size()))) {
     ++stats_.global_unsupported;
     return std::nullopt;
   }
-  for (const Fix& other : hits) {
-    const bool elsewhere =
-        !isNear(best->pose, other.pose, options_.global_ambiguity_distance, params_.loop_ambiguity_heading);
-    if (elsewhere && other.fit >= best->fit - options_.global_fit_margin) {
-      ++stats_.global_ambiguous;
-      return std::nullopt;
-    }
+  return best;
+}
+
+std::vector<Vec2> MapLocalizer::sequencePoints(const Pose2& predicted) const {
+  std::vector<Vec2> all;
+  for (const SearchedScan& searched : searched_) {
+    if (!isNear(searched.pose, predicted, options_.global_sequence_distance, 2.0 * M_PI)) continue;
+    const Pose2 into_current = between(predicted, searched.pose);
+    for (const Vec2& p : searched.points) all.push_back(into_current.transform(p));
   }
-  return *best;
+  const size_t n = std::min(all.size(), static_cast<size_t>(std::max(1, options_.global_points)));
+  std::vector<Vec2> points;
+  for (size_t k = 0; k < n; ++k) points.push_back(all[k * all.size() / n]);
+  return points;
+}
+
+std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& raw, const PreparedScan& scan,
+                                                              const Pose2& predicted) {
+  ++stats_.global_searches;
+  const CorrelativeQuery query{options_.global_min_score, options_.global_score_margin, options_.global_ambiguity_distance,
+                               params_.loop_ambiguity_heading};
+  const CorrelativeSearchResult found = correlative_->find(sequencePoints(predicted), query);
+  stats_.global_nodes += found.scored_nodes;
+  // The places the scans fit about equally well: a place whose rays would pass through mapped walls
+  // is not where the robot is (a corridor seen the wrong way round, a look-alike).
+  // Of the others, one that misfits (1 − score) more than global_misfit_ratio times the best does
+  // is no rival (PSM SLAM's loop ambiguity rule compares error indices the same way).
+  std::vector<CorrelativeHit> places;
+  for (const CorrelativeHit& place : found.places) {
+    if (field_->seeThrough(raw, place.pose, options_.global_see_through_clearance) > options_.global_max_see_through)
+      ++stats_.global_see_through;
+    else if (places.empty() || 1.0 - place.score <= options_.global_misfit_ratio * (1.0 - places.front().score))
+      places.push_back(place);
+  }
+  if (places.empty()) return std::nullopt;
+  if (places.size() > 1) {
+    ++stats_.global_ambiguous;
+    return std::nullopt;
+  }
+  std::optional<Fix> fix = refineGlobalHit(places.front().pose, scan, raw.laser_pose);
+  if (!fix) return std::nullopt;
+  fix->fit = field_->fit(raw, fix->pose);
+  if (fix->fit < options_.global_min_fit) return std::nullopt;
+  return fix;
 }
 
 void MapLocalizer::lose() {
@@ -242,6 +293,7 @@ void MapLocalizer::lose() {
   failures_in_a_row_ = unmatched_near_map_ = 0;
   hypothesis_.reset();
   last_search_at_.reset();
+  searched_.clear();
   local_reference_.reset();  // seen from where the robot may no longer be
   ++stats_.losses;
 }
@@ -264,7 +316,7 @@ bool MapLocalizer::searchDue(const Pose2& predicted) const {
 void MapLocalizer::searchAndConfirm(const LaserScan& raw, const PreparedScan& scan, const Pose2& predicted,
                                     MapLocalizationResult& result) {
   last_search_at_ = predicted;
-  const std::optional<Fix> hit = searchGlobally(raw, scan);
+  const std::optional<Fix> hit = searchGlobally(raw, scan, predicted);
   if (!hit) {
     hypothesis_.reset();
     return;
@@ -310,7 +362,9 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
     }
   } else {
     result.usable = true;
+    searched_.push_back({predicted, searchPoints(scan)});
     if (searchDue(predicted)) searchAndConfirm(scan, *prepared, predicted, result);
+    if (localized_) searched_.clear();
   }
   dead_reckoning_.push_back(predicted);
   last_scan_motion_ = result.found ? Pose2() : between(last_scan_pose_, pose_);  // a fix is not a motion

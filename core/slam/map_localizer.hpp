@@ -14,12 +14,14 @@
 // corridor, its view may continue the one before).
 //
 // Global localisation. When the start is unknown, or the robot has been lost for
-// `lost_after_scans` scans in a row (kidnapped, or the odometry failed), the scan is matched
-// against the reference scans from several headings each, again each time the robot has moved
-// on by `global_search_spacing` or turned by `global_search_turn` (PSM converges from ±45° of heading
-// and from within about half the reference spacing). A hit is taken only when no other place
-// fits about as well (the loop-closure ambiguity rule) and the next search agrees with it after
-// the odometry in between: a look-alike corridor gives no hit rather than a wrong one. Until then
+// `lost_after_scans` scans in a row (kidnapped, or the odometry failed), every robot pose near
+// the map's reference poses, at every heading, is scored by how well the scan, and the scans
+// seen since the loss placed by dead reckoning, lie on the map (correlative_search.hpp); the
+// search is repeated each time the robot has moved on by `global_search_spacing` or turned by
+// `global_search_turn`. The best pose is taken only when no other place (one seeing through no
+// mapped wall) fits about as well (the loop-closure ambiguity rule), PSM refines it with the
+// nearest reference scans alike, and the next search agrees with it after the odometry in
+// between: a look-alike corridor gives no hit rather than a wrong one. Until then
 // the poses are odometry only and flagged as such; once a fix is found, the final trajectory
 // re-places the scans since the loss by odometry from the fix.
 //
@@ -35,6 +37,7 @@
 #include "odometry/odometry_model.hpp"
 #include "scanmatch/prepared_scan.hpp"
 #include "scanmatch/scan_matcher.hpp"
+#include "slam/correlative_search.hpp"
 #include "slam/map_fit_field.hpp"
 #include "slam/psm_slam_params.hpp"
 
@@ -67,8 +70,9 @@ struct MapLocalizerStats {
   size_t gate_rejections = 0;      ///< tracking: good matches outside the χ² gate
   size_t odometry_faults = 0;      ///< tracking: gated-out matches taken as odometry faults
   size_t global_searches = 0;
-  size_t global_matches = 0;       ///< matches tried by the global searches
-  size_t global_ambiguous = 0;     ///< searches whose best hit had a look-alike elsewhere
+  size_t global_nodes = 0;         ///< poses and pose ranges the global searches scored
+  size_t global_ambiguous = 0;     ///< searches whose best pose had a look-alike elsewhere
+  size_t global_unrefined = 0;     ///< best poses PSM could not refine with a reference scan
   size_t global_see_through = 0;   ///< hits refused for seeing through mapped walls
   size_t global_unsupported = 0;   ///< searches whose best hit too few reference scans found
   size_t global_unconfirmed = 0;   ///< unambiguous hits the next search did not agree with
@@ -127,6 +131,11 @@ class MapLocalizer {
     Pose2 laser_mount;
     PreparedScan scan;
   };
+  /// A scan seen while lost: a few of its points (robot frame) and its dead-reckoning pose.
+  struct SearchedScan {
+    Pose2 pose;
+    std::vector<Vec2> points;
+  };
   struct Hypothesis {
     Pose2 pose;           ///< the hit's robot pose
     Pose2 odometry_pose;  ///< the dead-reckoning pose at that scan
@@ -158,8 +167,15 @@ class MapLocalizer {
   /// motion kept up (a good match just outside the gate is then taken, not rejected).
   bool odometryFaultExplains(const Pose2& measured) const;
   bool withinGate(const Vec3& innovation, const Mat3& innovation_cov) const;
-  /// Global search: the unambiguous best hit of this scan, if any.
-  std::optional<Fix> searchGlobally(const LaserScan& raw, const PreparedScan& scan);
+  /// Global search: the unambiguous best hit of this scan (and those before it, while lost), if any.
+  std::optional<Fix> searchGlobally(const LaserScan& raw, const PreparedScan& scan, const Pose2& predicted);
+  /// The scans seen while lost, within global_sequence_distance of `predicted`, as points in
+  /// its robot frame (placed by dead reckoning): at most global_points of them.
+  std::vector<Vec2> sequencePoints(const Pose2& predicted) const;
+  /// The best hit refined by PSM with the reference scans nearest to it, if enough agree.
+  std::optional<Fix> refineGlobalHit(const Pose2& hit, const PreparedScan& scan, const Pose2& mount);
+  /// At most global_points of the scan's readings within max_range, in the robot frame.
+  std::vector<Vec2> searchPoints(const LaserScan& raw) const;
   void lose();
   void record(const MapLocalizationResult& result);
 
@@ -168,6 +184,7 @@ class MapLocalizer {
   ScanMatcher matcher_;
   std::vector<Reference> references_;
   std::optional<MapFitField> field_;
+  std::optional<CorrelativeMapSearch> correlative_;
   OdometryIntegrator odometry_;
   bool have_odometry_ = false;
   Pose2 pending_motion_;
@@ -183,6 +200,7 @@ class MapLocalizer {
   std::optional<Hypothesis> hypothesis_;
   std::optional<LocalReference> local_reference_;
   std::optional<Pose2> last_search_at_;  ///< dead-reckoning pose of the last global search
+  std::vector<SearchedScan> searched_;   ///< the scans since the loss, newest last
   std::optional<size_t> lost_since_;  ///< first scan of the current odometry-only stretch
 
   std::vector<PoseStamped> online_;

@@ -118,16 +118,23 @@ void describeLocalization(ParameterTable& t, MapLocalizationParams& p) {
   t.number("max_off_map_sigma", p.max_off_map_sigma, 0.0, 1000.0, "m: on new ground, lost beyond this position sigma");
   t.number("global_search_spacing", p.global_search_spacing, 0.0, 1000.0, "m: while lost, search again after moving this far");
   t.angle("global_search_turn_deg", p.global_search_turn, 0.0, 360.0, "... or turning this much");
-  t.integer("global_headings", p.global_headings, 1, 360, "headings tried per reference scan in a global search");
+  t.number("global_sequence_distance", p.global_sequence_distance, 0.0, 100.0,
+           "m: scans seen while lost this near are searched with the scan");
+  t.number("global_resolution", p.global_resolution, 0.01, 10.0, "m: grid of the global search");
+  t.number("global_sigma", p.global_sigma, 0.001, 10.0, "m: spread of its likelihood field");
+  t.number("global_region_radius", p.global_region_radius, 0.0, 100.0, "m: robot positions searched around reference poses");
+  t.integer("global_points", p.global_points, 1, 100000, "readings it scores at most");
+  t.number("global_min_score", p.global_min_score, 0.0, 1.0, "score the best pose needs at least");
+  t.number("global_ambiguity_distance", p.global_ambiguity_distance, 0.0, 1000.0, "m: another pose this far away ...");
+  t.number("global_score_margin", p.global_score_margin, 0.0, 1.0, "... scoring within this of the best ...");
+  t.number("global_misfit_ratio", p.global_misfit_ratio, 1.0, 1000.0, "... and misfitting at most this times as much: no fix");
   t.number("global_min_overlap", p.global_min_overlap, 0.0, 1.0, "associated fraction of a global hit at least");
   t.number("global_fit_distance", p.global_fit_distance, 0.001, 10.0, "m: a reading this close to the map fits");
   t.number("global_min_fit", p.global_min_fit, 0.0, 1.0, "fraction of the scan the best hit fits at least");
   t.number("global_max_see_through", p.global_max_see_through, 0.0, 1.0, "fraction of rays through mapped walls at most");
   t.number("global_see_through_clearance", p.global_see_through_clearance, 0.0, 100.0,
            "m from either end of a ray not checked");
-  t.integer("global_min_support", p.global_min_support, 1, 1000, "reference scans that must find the best hit");
-  t.number("global_ambiguity_distance", p.global_ambiguity_distance, 0.0, 1000.0, "m: another hit this far away ...");
-  t.number("global_fit_margin", p.global_fit_margin, 0.0, 1.0, "... fitting within this of the best: no fix");
+  t.integer("global_min_support", p.global_min_support, 1, 1000, "reference scans whose refinement must agree");
   t.number("confirm_translation", p.confirm_translation, 0.0, 100.0, "m: two hits agree after the odometry");
   t.angle("confirm_rotation_deg", p.confirm_rotation, 0.0, 180.0, "the same for heading");
 }

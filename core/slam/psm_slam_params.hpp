@@ -37,26 +37,37 @@ struct MapLocalizationParams {
   /// confirmed only by a search from another viewpoint.
   double global_search_spacing = 0.25;   ///< m
   double global_search_turn = deg2rad(15.0);
-  /// Global search: each reference scan is matched from this many headings spread over the full
-  /// circle (PSM's first orientation step searches ±loop_search_window around each).
-  int global_headings = 6;
-  /// A hit needs this overlap (stricter than tracking) and loop_max_error_index.
+  /// Global search (correlative_search.hpp): every robot pose within global_region_radius of a
+  /// reference pose, at every heading, is scored by how well at most global_points readings of the
+  /// scan lie on the map's points (a likelihood field of spread global_sigma on a grid of
+  /// global_resolution). The best needs global_min_score; another pose elsewhere (more than
+  /// global_ambiguity_distance or loop_ambiguity_heading away) within global_score_margin of it,
+  /// and misfitting (1 − score) at most global_misfit_ratio times as much, makes the search
+  /// ambiguous: no fix. The best is then refined by PSM with the reference scans
+  /// nearest to it. While lost, the scans seen since within global_sequence_distance of the
+  /// robot, placed by dead reckoning, are scored with it: a longer view tells look-alikes apart.
+  double global_sequence_distance = 4.0;  ///< m
+  double global_resolution = 0.05;       ///< m
+  double global_sigma = 0.1;             ///< m
+  double global_region_radius = 1.5;     ///< m
+  int global_points = 100;
+  double global_min_score = 0.65;
+  double global_score_margin = 0.05;
+  double global_misfit_ratio = 2.0;
+  /// A PSM refinement needs this overlap (stricter than tracking) and loop_max_error_index.
   double global_min_overlap = 0.5;
-  /// Hits are ranked by how well the whole scan fits the map there (map_fit_field.hpp): the
-  /// fraction of readings within global_fit_distance of a map point. The best needs at least
-  /// global_min_fit; another hit more than global_ambiguity_distance (or loop_ambiguity_heading)
-  /// away that fits within global_fit_margin of it makes the search ambiguous: no fix.
+  /// The refined pose must fit the whole scan to the map (map_fit_field.hpp): at least
+  /// global_min_fit of its readings within global_fit_distance of a map point.
   double global_fit_distance = 0.1;      ///< m
   double global_min_fit = 0.7;
-  double global_fit_margin = 0.1;
   /// A hit whose rays cross the map more than global_see_through_clearance before their
   /// endpoints (seeing through a mapped wall) on more than this fraction of the scan is refused.
   /// (Not applied to tracking: rays grazing door jambs would count, and a tracked pose is local.)
   double global_max_see_through = 0.1;
   double global_see_through_clearance = 0.5;  ///< m
-  /// The best hit must be found from at least this many different reference scans (within
-  /// confirm_translation / confirm_rotation of each other): a place that is really in the map is
-  /// seen from its neighbouring reference scans too, a chance fit usually from one.
+  /// The refinement must come out the same (within confirm_translation / confirm_rotation) from at
+  /// least this many different reference scans: a place that is really in the map is seen from
+  /// its neighbouring reference scans too, a chance fit usually from one.
   int global_min_support = 2;
   double global_ambiguity_distance = 0.5;  ///< m
   /// The hit of the next search must agree with the previous one after the odometry in between.

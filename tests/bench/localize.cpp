@@ -159,10 +159,10 @@ int main(int argc, char** argv) {
     return 0;
   }
   std::printf("counts: %zu matched, %zu odometry-only, %zu on new ground, %zu match failures, "
-              "%zu gate rejections, %zu global searches (%zu matches, %zu ambiguous, %zu hits seeing through walls, "
-              "%zu unsupported, %zu unconfirmed), %zu fixes, %zu losses\n",
+              "%zu gate rejections, %zu global searches (%zu nodes scored, %zu ambiguous, %zu unrefined, "
+              "%zu hits seeing through walls, %zu unsupported, %zu unconfirmed), %zu fixes, %zu losses\n",
               s.matched_scans, s.odometry_only_scans, s.new_ground_scans, s.match_failures,
               s.gate_rejections, s.global_searches,
-              s.global_matches, s.global_ambiguous, s.global_see_through, s.global_unsupported, s.global_unconfirmed, s.fixes, s.losses);
+              s.global_nodes, s.global_ambiguous, s.global_unrefined, s.global_see_through, s.global_unsupported, s.global_unconfirmed, s.fixes, s.losses);
   return 0;
 }

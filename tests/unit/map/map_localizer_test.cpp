@@ -100,12 +100,13 @@ Localised localise(const std::vector<MapReference>& map, const SyntheticRun& run
 double distance(const Pose2& a, const Pose2& b) { return (a.translation() - b.translation()).norm(); }
 
 // The loop is nearly symmetric: the global search refuses look-alike places until one fits
-// unambiguously (issue 15's goal of a fix within 10 scans is not met yet: printed, not asserted).
+// unambiguously, and still finds the start within issue 15's 10 scans.
 TEST(MapLocalizer, FindsAnUnknownStartAndThenTracksTheMap) {
   const std::vector<MapReference> map = mapOfOneLap();
   const SyntheticRun run = runFromMidLoop(21);
   const Localised loc = localise(map, run);
   ASSERT_GE(loc.stats.first_fix_scan, 0) << "never found";
+  EXPECT_LT(loc.stats.first_fix_scan, 10) << "issue 15: the start is found within 10 scans";
   std::printf("unknown start found at scan %lld (%zu ambiguous searches)\n",
               static_cast<long long>(loc.stats.first_fix_scan), loc.stats.global_ambiguous);
   for (size_t k = 0; k < run.scans.size(); ++k) {
@@ -167,6 +168,7 @@ class KidnapTally {
     latest_notice_ = std::max(latest_notice_, noticed - k.kidnap);
     if (found_again && *found_again - k.kidnap <= 20) ++found_within_20_;
   }
+  size_t foundWithin20() const { return found_within_20_; }
   void print(const char* who) const {
     std::printf("%s: kidnap noticed within %zu scans on every seed; found again within 20 scans on %zu of 20 seeds\n", who,
                 latest_notice_, found_within_20_);
@@ -179,8 +181,8 @@ class KidnapTally {
 // 20 seeds: the robot is carried 4-12 m along the loop mid-run while its odometry notices nothing.
 // The localiser notices (along a look-alike corridor it may take about a hundred scans), flags its
 // poses as odometry only, and no fix, ever,
-// is more than 0.3 m from the truth (no wrong lock-on). How soon it is found again is printed
-// (issue 15's goal, within 20 scans, is not met on every seed yet).
+// is more than 0.3 m from the truth (no wrong lock-on). How soon it is found again is printed;
+// issue 15's goal, within 20 scans, is met on 16 of 20 seeds (the others are noticed late).
 TEST(MapLocalizer, AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace) {
   const std::vector<MapReference> map = mapOfOneLap();
   KidnapTally tally;
@@ -207,6 +209,7 @@ TEST(MapLocalizer, AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace) {
     tally.add(kidnapping, *noticed, found_again);
   }
   tally.print("MapLocalizer");
+  EXPECT_GE(tally.foundWithin20(), 16u) << "fewer kidnaps recovered within 20 scans than the correlative search gave";
 }
 
 /// Feeds `run` to `estimator` and finishes it; the report.
@@ -251,7 +254,7 @@ TEST(MapLocalization, AKnownStartTracksOverTheFixedMap) {
 // The kidnap of MapLocalizer.AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace with temporary
 // mapping (the default): scans near the map without a match with it lose the robot, the global
 // search finds it again, and every pose from a fix on is where the robot is. How soon is printed
-// (issue 15's goal: found again within 20 scans on every seed).
+// (issue 15's goal: found again within 20 scans on every seed; met on 15 of 20).
 TEST(MapLocalization, AKidnappedRobotIsNoticedAndFoundAgainWhereItIs) {
   const StoredMap map = storedMapOfOneLap();
   KidnapTally tally;
@@ -279,6 +282,7 @@ TEST(MapLocalization, AKidnappedRobotIsNoticedAndFoundAgainWhereItIs) {
     tally.add(kidnapping, *noticed, found_again);
   }
   tally.print("temporary mapping");
+  EXPECT_GE(tally.foundWithin20(), 15u) << "fewer kidnaps recovered within 20 scans than the correlative search gave";
 }
 
 TEST(MapContinuation, AKnownStartMapsOnInTheMapsFrameAndClosesLoopsWithIt) {

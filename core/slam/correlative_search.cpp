@@ -1,0 +1,189 @@
+#include "slam/correlative_search.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <queue>
+
+namespace polarslam {
+namespace {
+
+constexpr double kScoreScale = 255.0;
+
+/// Level k from level k − 1: the maximum over the 2 × 2 windows of 2^(k−1) cells from each cell.
+std::vector<uint8_t> poolMax(const std::vector<uint8_t>& finer, int width, int height, int half) {
+  std::vector<uint8_t> coarser(finer.size());
+  auto at = [&](int x, int y) -> uint8_t {
+    return x < width && y < height ? finer[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)] : 0;
+  };
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      coarser[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)] =
+          std::max({at(x, y), at(x + half, y), at(x, y + half), at(x + half, y + half)});
+  return coarser;
+}
+
+}  // namespace
+
+CorrelativeMapSearch::CorrelativeMapSearch(const std::vector<Vec2>& map_points,
+                                           const std::vector<Vec2>& reference_positions, CorrelativeSearchParams params)
+    : params_(params) {
+  params_.levels = std::clamp(params_.levels, 1, 12);
+  std::vector<Vec2> finite_points, finite_references;
+  std::copy_if(map_points.begin(), map_points.end(), std::back_inserter(finite_points),
+               [](const Vec2& p) { return p.allFinite(); });
+  std::copy_if(reference_positions.begin(), reference_positions.end(), std::back_inserter(finite_references),
+               [](const Vec2& p) { return p.allFinite(); });
+  if (finite_points.empty() || finite_references.empty() || !(params_.resolution > 0.0) || !(params_.sigma > 0.0))
+    return;
+  Vec2 lo = finite_points.front(), hi = lo;
+  for (const std::vector<Vec2>* set : {&finite_points, &finite_references})
+    for (const Vec2& p : *set) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+  const double res = params_.resolution;
+  const double margin = params_.region_radius + 3.0 * params_.sigma + 2.0 * res;
+  origin_ = lo - Vec2(margin, margin);
+  width_ = static_cast<int>(std::ceil((hi.x() - lo.x() + 2.0 * margin) / res)) + 1;
+  height_ = static_cast<int>(std::ceil((hi.y() - lo.y() + 2.0 * margin) / res)) + 1;
+  const size_t cells = static_cast<size_t>(width_) * static_cast<size_t>(height_);
+
+  // Both rasters stamp a disc around each point: the score grid exp(-d²/2σ²) out to 3σ, the
+  // region the reference positions' discs.
+  auto stamp = [&](std::vector<uint8_t>& grid, const Vec2& p, double radius, auto value) {
+    const double cx = (p.x() - origin_.x()) / res, cy = (p.y() - origin_.y()) / res;
+    const int reach = static_cast<int>(std::ceil(radius / res)) + 1;
+    for (int y = static_cast<int>(cy) - reach; y <= static_cast<int>(cy) + reach; ++y)
+      for (int x = static_cast<int>(cx) - reach; x <= static_cast<int>(cx) + reach; ++x) {
+        if (x < 0 || y < 0 || x >= width_ || y >= height_) continue;
+        const double d = res * std::hypot(x + 0.5 - cx, y + 0.5 - cy);
+        if (d > radius) continue;
+        uint8_t& cell = grid[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
+        cell = std::max(cell, value(d));
+      }
+  };
+  std::vector<uint8_t> score(cells, 0), region(cells, 0);
+  const double sigma = params_.sigma;
+  for (const Vec2& p : finite_points)
+    stamp(score, p, 3.0 * sigma, [&](double d) {
+      return static_cast<uint8_t>(std::lround(kScoreScale * std::exp(-0.5 * d * d / (sigma * sigma))));
+    });
+  // A robot position is a cell corner (origin + cell · resolution): shift by half a cell.
+  for (const Vec2& p : finite_references)
+    stamp(region, p + Vec2(0.5 * res, 0.5 * res), params_.region_radius, [](double) { return uint8_t{1}; });
+  levels_.push_back(std::move(score));
+  region_.push_back(std::move(region));
+  for (int k = 1; k < params_.levels; ++k) {
+    levels_.push_back(poolMax(levels_.back(), width_, height_, 1 << (k - 1)));
+    region_.push_back(poolMax(region_.back(), width_, height_, 1 << (k - 1)));
+  }
+}
+
+int CorrelativeMapSearch::cellValue(int level, int x, int y) const {
+  // A window starting left of (below) the grid but reaching into it: its part in the grid is
+  // within the window starting at 0, whose maximum bounds it.
+  const int window = 1 << level;
+  if (x <= -window || y <= -window || x >= width_ || y >= height_) return 0;
+  x = std::max(x, 0);
+  y = std::max(y, 0);
+  return levels_[static_cast<size_t>(level)][static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
+}
+
+bool CorrelativeMapSearch::regionAllows(int level, int x, int y) const {
+  if (x < 0 || y < 0 || x >= width_ || y >= height_) return false;
+  return region_[static_cast<size_t>(level)][static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)] != 0;
+}
+
+double CorrelativeMapSearch::nodeScore(const RotatedPoints& rotated, int level, int x, int y) const {
+  int sum = 0;
+  for (size_t i = 0; i < rotated.dx.size(); ++i) sum += cellValue(level, x + rotated.dx[i], y + rotated.dy[i]);
+  return rotated.dx.empty() ? 0.0 : sum / (kScoreScale * static_cast<double>(rotated.dx.size()));
+}
+
+Pose2 CorrelativeMapSearch::poseOf(const RotatedPoints& rotated, int x, int y) const {
+  return Pose2(origin_.x() + x * params_.resolution, origin_.y() + y * params_.resolution, rotated.theta);
+}
+
+CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& points, const CorrelativeQuery& query) const {
+  CorrelativeSearchResult result;
+  if (levels_.empty()) return result;
+  // A point farther than the grid is wide cannot land on the map from any searched position.
+  const double max_reach = params_.resolution * std::hypot(width_, height_);
+  double reach = 0.0;
+  std::vector<Vec2> usable;
+  for (const Vec2& p : points)
+    if (p.allFinite() && p.norm() <= max_reach) {
+      usable.push_back(p);
+      reach = std::max(reach, p.norm());
+    }
+  if (usable.empty()) return result;
+  // A heading step that moves the farthest point by at most one cell (Hess et al., (7)).
+  const double res = params_.resolution;
+  const double step = std::acos(std::clamp(1.0 - res * res / (2.0 * std::max(reach, res) * std::max(reach, res)), -1.0, 1.0));
+  const int headings = std::max(1, static_cast<int>(std::ceil(2.0 * std::numbers::pi / step)));
+  std::vector<RotatedPoints> rotations(static_cast<size_t>(headings));
+  const int top = params_.levels - 1, span = 1 << top;
+  // Best first over all headings (§V.B searches depth first per heading; best first scores
+  // fewer nodes when most headings are hopeless): the first leaf taken is the best pose.
+  auto lower = [](const Node& a, const Node& b) { return a.score < b.score; };
+  std::priority_queue<Node, std::vector<Node>, decltype(lower)> open(lower);
+  for (int h = 0; h < headings; ++h) {
+    RotatedPoints& rotated = rotations[static_cast<size_t>(h)];
+    rotated.theta = wrapAngle(2.0 * std::numbers::pi * h / headings);
+    const double c = std::cos(rotated.theta), s = std::sin(rotated.theta);
+    for (const Vec2& p : usable) {
+      rotated.dx.push_back(static_cast<int>(std::floor((c * p.x() - s * p.y()) / res)));
+      rotated.dy.push_back(static_cast<int>(std::floor((s * p.x() + c * p.y()) / res)));
+    }
+    for (int y = 0; y < height_; y += span)
+      for (int x = 0; x < width_; x += span)
+        if (regionAllows(top, x, y)) {
+          ++result.scored_nodes;
+          const Node root{x, y, top, h, nodeScore(rotated, top, x, y)};
+          if (root.score >= query.min_score) open.push(root);
+        }
+  }
+  double threshold = query.min_score;
+  std::vector<CorrelativeHit> hits;
+  while (!open.empty() && open.top().score >= threshold) {
+    const Node node = open.top();
+    open.pop();
+    const RotatedPoints& rotated = rotations[static_cast<size_t>(node.heading)];
+    if (node.level == 0) {
+      hits.push_back({poseOf(rotated, node.x, node.y), node.score});
+      threshold = std::max(threshold, hits.front().score - query.rival_margin);
+      continue;
+    }
+    const int level = node.level - 1, half = 1 << level;
+    for (const auto& [ox, oy] : {std::pair{0, 0}, {half, 0}, {0, half}, {half, half}}) {
+      const int x = node.x + ox, y = node.y + oy;
+      if (!regionAllows(level, x, y)) continue;
+      ++result.scored_nodes;
+      const Node child{x, y, level, node.heading, nodeScore(rotated, level, x, y)};
+      if (child.score >= threshold) open.push(child);
+    }
+  }
+  // Leaves come out best first: the first of each place is its best pose.
+  for (const CorrelativeHit& hit : hits) {
+    const bool new_place = std::none_of(result.places.begin(), result.places.end(), [&](const CorrelativeHit& place) {
+      return isNear(place.pose, hit.pose, query.rival_distance, query.rival_heading);
+    });
+    if (new_place) result.places.push_back(hit);
+  }
+  return result;
+}
+
+double CorrelativeMapSearch::score(const std::vector<Vec2>& points, const Pose2& pose) const {
+  if (levels_.empty() || points.empty()) return 0.0;
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta), res = params_.resolution;
+  int sum = 0;
+  for (const Vec2& p : points) {
+    const double fx = (pose.x + c * p.x() - s * p.y() - origin_.x()) / res;
+    const double fy = (pose.y + s * p.x() + c * p.y() - origin_.y()) / res;
+    if (fx >= 0.0 && fy >= 0.0 && fx < width_ && fy < height_) sum += cellValue(0, static_cast<int>(fx), static_cast<int>(fy));
+  }
+  return sum / (kScoreScale * static_cast<double>(points.size()));
+}
+
+}  // namespace polarslam

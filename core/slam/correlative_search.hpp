@@ -1,0 +1,91 @@
+#pragma once
+// Global localisation by exhaustive correlative matching (Olson, "Real-time correlative scan
+// matching", ICRA 2009) with the branch-and-bound of Hess et al., "Real-time loop closure in 2D
+// LIDAR SLAM" (ICRA 2016, §V): every robot pose within `region_radius` of the map's reference
+// poses, at every heading, is scored by how well a set of points (a scan, or several scans placed
+// by odometry) lies on the map, and the best is found without scoring most of them.
+//
+// The map's points are rasterised once into a score grid: exp(-d²/2σ²) of the distance d to the
+// nearest map point (a likelihood field, Thrun, Burgard & Fox, "Probabilistic Robotics", §6.4).
+// Level k of the precomputed grids holds, per cell, the maximum of the score grid over the
+// 2^k × 2^k cells from there on, so the score of a level-k node (2^k × 2^k translations at one
+// heading) bounds the score of every translation in it: nodes below the best so far are pruned.
+//
+// The search returns the best pose of each place that scores within `rival_margin` of the best
+// (places farther than `rival_distance` or `rival_heading` apart), best first, so that the caller
+// can refuse an ambiguous answer (a look-alike corridor) or tell the places apart by other means.
+//
+//   CorrelativeMapSearch search(map_points, reference_positions, params);
+//   CorrelativeSearchResult r = search.find(points_in_robot_frame, query);
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "geometry/pose2.hpp"
+
+namespace polarslam {
+
+struct CorrelativeSearchParams {
+  double resolution = 0.05;    ///< m per cell of the score grid and translation step
+  double sigma = 0.1;          ///< m: the likelihood field's spread
+  double region_radius = 1.5;  ///< m: robot positions searched around each reference pose
+  int levels = 8;              ///< precomputed grids; the coarsest node spans 2^(levels-1) cells
+};
+
+struct CorrelativeQuery {
+  double min_score = 0.5;      ///< mean per-point score a pose needs (0..1)
+  double rival_margin = 0.05;  ///< a rival scores at least best − this
+  double rival_distance = 0.5;     ///< m
+  double rival_heading = 0.5;      ///< rad
+};
+
+struct CorrelativeHit {
+  Pose2 pose;
+  double score = 0.0;
+};
+
+struct CorrelativeSearchResult {
+  std::vector<CorrelativeHit> places;  ///< best first; the others within rival_margin of it
+  size_t scored_nodes = 0;             ///< nodes and leaves scored (the work done)
+};
+
+class CorrelativeMapSearch {
+ public:
+  /// `map_points` in the map frame; robot positions are searched within region_radius of
+  /// `reference_positions`. An empty map gives a search that finds nothing.
+  CorrelativeMapSearch(const std::vector<Vec2>& map_points, const std::vector<Vec2>& reference_positions,
+                       CorrelativeSearchParams params);
+
+  /// The best robot pose for `points` (robot frame), if any scores at least query.min_score.
+  CorrelativeSearchResult find(const std::vector<Vec2>& points, const CorrelativeQuery& query) const;
+
+  /// Mean score of `points` (robot frame) with the robot at `pose`.
+  double score(const std::vector<Vec2>& points, const Pose2& pose) const;
+  /// The robot positions searched lie on origin() + resolution · (i, j).
+  Vec2 origin() const { return origin_; }
+
+ private:
+  struct Node {
+    int x = 0, y = 0;     ///< translation cell of the node's corner
+    int level = 0;
+    int heading = 0;      ///< index into the rotated point sets
+    double score = 0.0;
+  };
+  /// A heading's points as cell offsets from the robot's cell.
+  struct RotatedPoints {
+    double theta = 0.0;
+    std::vector<int> dx, dy;
+  };
+  int cellValue(int level, int x, int y) const;
+  double nodeScore(const RotatedPoints& rotated, int level, int x, int y) const;
+  bool regionAllows(int level, int x, int y) const;
+  Pose2 poseOf(const RotatedPoints& rotated, int x, int y) const;
+
+  CorrelativeSearchParams params_;
+  Vec2 origin_ = Vec2::Zero();
+  int width_ = 0, height_ = 0;
+  std::vector<std::vector<uint8_t>> levels_;  ///< [level][y * width + x]: max score over the window
+  std::vector<std::vector<uint8_t>> region_;  ///< [level][y * width + x]: an allowed translation in the window
+};
+
+}  // namespace polarslam

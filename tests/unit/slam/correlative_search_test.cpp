@@ -1,0 +1,122 @@
+// CorrelativeMapSearch: the branch-and-bound finds what scoring every pose finds, places a scan
+// in a map where it was taken, and returns every look-alike place of a symmetric map.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "slam/correlative_search.hpp"
+#include "unit/slam/synthetic_run.hpp"
+
+namespace polarslam {
+namespace {
+
+/// Points along the segments of `world`, every `step` m.
+std::vector<Vec2> pointsOf(const std::vector<std::pair<Vec2, Vec2>>& walls, double step) {
+  std::vector<Vec2> points;
+  for (const auto& [a, b] : walls) {
+    const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step)));
+    for (int i = 0; i <= n; ++i) points.push_back(a + (b - a) * (static_cast<double>(i) / n));
+  }
+  return points;
+}
+
+/// The readings of a scan from `pose` in the loop world, in the robot frame.
+std::vector<Vec2> scanPoints(const Pose2& pose, uint64_t seed) {
+  testing::SyntheticRunOptions options;
+  std::mt19937_64 rng(seed);
+  const LaserScan scan = testing::castScan(testing::makeLoopWorld(), pose, options, rng, 0);
+  std::vector<Vec2> points;
+  for (size_t i = 0; i < scan.size(); i += 2)
+    if (scan.valid(i)) points.push_back(scan.laser_pose.transform(scan.point(i)));
+  return points;
+}
+
+/// The loop world's map: the points of scans every 5 poses along its path, with their poses.
+struct LoopMap {
+  std::vector<Vec2> points, positions;
+  LoopMap() {
+    testing::SyntheticRunOptions options;
+    const std::vector<Pose2> path = testing::loopPath(options);
+    for (size_t k = 0; k < path.size(); k += 5) {
+      for (const Vec2& p : scanPoints(path[k], k)) points.push_back(path[k].transform(p));
+      positions.push_back(path[k].translation());
+    }
+  }
+};
+
+TEST(CorrelativeMapSearch, FindsTheSamePoseAsScoringEveryPose) {
+  // A small asymmetric room: an L of walls and a pillar.
+  const std::vector<Vec2> map = pointsOf({{{0, 0}, {6, 0}}, {{6, 0}, {6, 4}}, {{0, 0}, {0, 2.5}}, {{2, 2}, {2.5, 2}}}, 0.05);
+  const std::vector<Vec2> positions{{2.0, 1.0}, {4.0, 2.0}};
+  const CorrelativeSearchParams params{0.1, 0.1, 1.0, 5};
+  const CorrelativeMapSearch search(map, positions, params);
+  const Pose2 truth(3.03, 1.12, 0.4);
+  std::vector<Vec2> points;
+  for (size_t i = 0; i < map.size(); i += 3) points.push_back(truth.inverseTransform(map[i]));
+  const CorrelativeQuery query{0.3, 0.0, 0.5, 0.5};
+  const CorrelativeSearchResult found = search.find(points, query);
+  ASSERT_FALSE(found.places.empty());
+
+  // Every searched pose scored: the same lattice and headings the search uses.
+  double reach = 0.0;
+  for (const Vec2& p : points) reach = std::max(reach, p.norm());
+  const double step = std::acos(1.0 - 0.01 / (2.0 * reach * reach));
+  const int headings = static_cast<int>(std::ceil(2.0 * std::numbers::pi / step));
+  double best = 0.0;
+  size_t scored = 0;
+  for (int h = 0; h < headings; ++h)
+    for (int j = 0; j < 120; ++j)
+      for (int i = 0; i < 120; ++i) {
+        const Pose2 pose(search.origin().x() + 0.1 * i, search.origin().y() + 0.1 * j, wrapAngle(2.0 * std::numbers::pi * h / headings));
+        const bool in_region = std::any_of(positions.begin(), positions.end(), [&](const Vec2& c) {
+          return (pose.translation() - c).norm() <= 0.99;
+        });
+        if (!in_region) continue;
+        ++scored;
+        best = std::max(best, search.score(points, pose));
+      }
+  EXPECT_GE(found.places.front().score, best - 1e-12) << "the search missed the best pose";
+  EXPECT_NEAR(found.places.front().score, search.score(points, found.places.front().pose), 1e-12);
+  EXPECT_LT(found.scored_nodes, scored / 5) << "branch and bound scored nearly every pose";
+  EXPECT_LT((found.places.front().pose.translation() - truth.translation()).norm(), 0.15);
+  EXPECT_LT(std::abs(wrapAngle(found.places.front().pose.theta - truth.theta)), 0.05);
+}
+
+TEST(CorrelativeMapSearch, PlacesAScanOfTheLoopWhereItWasTaken) {
+  const LoopMap loop;
+  const CorrelativeMapSearch search(loop.points, loop.positions, CorrelativeSearchParams{});
+  const Pose2 truth(-2.0, -3.0, 0.1);  // the lower corridor, between mapped scans
+  const CorrelativeSearchResult found = search.find(scanPoints(truth, 99), CorrelativeQuery{});
+  ASSERT_FALSE(found.places.empty());
+  const CorrelativeHit& best = found.places.front();
+  EXPECT_LT((best.pose.translation() - truth.translation()).norm(), 0.1);
+  EXPECT_LT(std::abs(wrapAngle(best.pose.theta - truth.theta)), 0.03);
+  EXPECT_GT(best.score, 0.8);
+}
+
+TEST(CorrelativeMapSearch, ASymmetricMapGivesEveryLookAlikePlace) {
+  // A square room: a scan of it fits at four headings.
+  const std::vector<Vec2> map = pointsOf({{{0, 0}, {4, 0}}, {{4, 0}, {4, 4}}, {{4, 4}, {0, 4}}, {{0, 4}, {0, 0}}}, 0.05);
+  const CorrelativeMapSearch search(map, {{2.0, 2.0}}, CorrelativeSearchParams{0.05, 0.1, 0.5, 6});
+  std::vector<Vec2> points;
+  const Pose2 truth(2.0, 2.0, 0.3);
+  for (size_t i = 0; i < map.size(); i += 2) points.push_back(truth.inverseTransform(map[i]));
+  const CorrelativeSearchResult found = search.find(points, CorrelativeQuery{});
+  EXPECT_EQ(found.places.size(), 4u);
+}
+
+TEST(CorrelativeMapSearch, NothingToSearchFindsNothing) {
+  const CorrelativeMapSearch empty_map({}, {{0.0, 0.0}}, CorrelativeSearchParams{});
+  EXPECT_TRUE(empty_map.find({{1.0, 0.0}}, CorrelativeQuery{}).places.empty());
+  const CorrelativeMapSearch search({{1.0, 0.0}, {1.0, 0.1}}, {{0.0, 0.0}}, CorrelativeSearchParams{});
+  EXPECT_TRUE(search.find({}, CorrelativeQuery{}).places.empty());
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  EXPECT_TRUE(search.find({{nan, 0.0}, {inf, 1.0}}, CorrelativeQuery{}).places.empty());
+  EXPECT_EQ(search.score({{nan, 0.0}}, Pose2()), 0.0);
+  EXPECT_EQ(search.score({{1e300, 0.0}}, Pose2()), 0.0) << "a point far off the grid scores nothing";
+}
+
+}  // namespace
+}  // namespace polarslam
