@@ -64,7 +64,9 @@ void MapLocalizationEstimator::track(const LaserScan& scan) {
   // should be seen and are not, it is not where it is thought to be (a kidnapping, a look-alike).
   if (r.map_matched) unmatched_near_map_ = 0;
   else if (r.usable && nearMap(last_result_.pose.pose)) ++unmatched_near_map_;
-  if (unmatched_near_map_ >= config_.slam.localization.lost_near_map_after_scans) loseTracking(scan.utime);
+  if (unmatched_near_map_ >= config_.slam.localization.lost_near_map_after_scans ||
+      (r.usable && localizer_.doubt(scan, last_result_.pose.pose)))
+    loseTracking(scan.utime);
 }
 
 bool MapLocalizationEstimator::nearMap(const Pose2& pose) const {
@@ -109,6 +111,8 @@ nlohmann::json localizationReportJson(const MapLocalizer& localizer, double seco
           {"global_see_through", s.global_see_through},
           {"global_unsupported", s.global_unsupported},
           {"global_unconfirmed", s.global_unconfirmed},
+          {"doubt_searches", s.doubt_searches},
+          {"doubts", s.doubts},
           {"fixes", s.fixes},
           {"losses", s.losses},
           {"first_fix_scan", s.first_fix_scan},

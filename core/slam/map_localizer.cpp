@@ -135,25 +135,31 @@ bool MapLocalizer::applyFix(const Fix& fix) {
   return true;
 }
 
-MapLocalizer::Tracked MapLocalizer::track(const PreparedScan& scan, const Pose2& mount, MapLocalizationResult& result) {
-  std::vector<std::pair<double, size_t>> nearest;
+std::vector<size_t> MapLocalizer::nearestReferences(const Pose2& pose, size_t count) const {
+  std::vector<std::pair<double, size_t>> near;
   for (size_t i = 0; i < references_.size(); ++i) {
-    const Pose2 relative = between(references_[i].pose, pose_);
+    const Pose2 relative = between(references_[i].pose, pose);
     const double distance = relative.translation().norm();
     if (distance <= options_.track_radius && std::abs(relative.theta) <= options_.track_heading)
-      nearest.emplace_back(distance + std::abs(relative.theta), i);
+      near.emplace_back(distance + std::abs(relative.theta), i);
   }
-  const size_t keep = std::min(nearest.size(), static_cast<size_t>(options_.track_candidates));
-  std::partial_sort(nearest.begin(), nearest.begin() + static_cast<long>(keep), nearest.end());
+  const size_t keep = std::min(near.size(), count);
+  std::partial_sort(near.begin(), near.begin() + static_cast<long>(keep), near.end());
+  std::vector<size_t> nearest;
+  for (size_t k = 0; k < keep; ++k) nearest.push_back(near[k].second);
+  return nearest;
+}
+
+MapLocalizer::Tracked MapLocalizer::track(const PreparedScan& scan, const Pose2& mount, MapLocalizationResult& result) {
+  const std::vector<size_t> nearest = nearestReferences(pose_, static_cast<size_t>(options_.track_candidates));
   std::vector<Pose2> priors{pose_};
   const Pose2 disagreement = between(pose_, constantVelocityPose());
   if (have_odometry_ && (disagreement.translation().norm() >= params_.odometry_check_translation ||
                          std::abs(disagreement.theta) >= params_.odometry_check_rotation))
     priors.push_back(constantVelocityPose());
   std::optional<Fix> best;
-  for (size_t k = 0; k < keep; ++k)
+  for (const size_t i : nearest)
     for (const Pose2& prior : priors) {
-      const size_t i = nearest[k].second;
       std::optional<Fix> fix = match(i, scan, mount, between(references_[i].pose, prior), false);
       if (fix && goodFix(*fix, false) && (!best || fix->error_index < best->error_index)) best = fix;
     }
@@ -214,17 +220,9 @@ std::vector<Vec2> MapLocalizer::searchPoints(const LaserScan& raw) const {
 
 std::optional<MapLocalizer::Fix> MapLocalizer::refineGlobalHit(const Pose2& hit, const PreparedScan& scan,
                                                                const Pose2& mount) {
-  std::vector<std::pair<double, size_t>> nearest;
-  for (size_t i = 0; i < references_.size(); ++i) {
-    const Pose2 relative = between(references_[i].pose, hit);
-    if (relative.translation().norm() <= options_.track_radius && std::abs(relative.theta) <= options_.track_heading)
-      nearest.emplace_back(relative.translation().norm() + std::abs(relative.theta), i);
-  }
-  const size_t keep = std::min(nearest.size(), static_cast<size_t>(std::max(options_.global_min_support, options_.track_candidates) + 1));
-  std::partial_sort(nearest.begin(), nearest.begin() + static_cast<long>(keep), nearest.end());
   std::vector<Fix> fixes;
-  for (size_t k = 0; k < keep; ++k) {
-    const size_t i = nearest[k].second;
+  for (const size_t i :
+       nearestReferences(hit, static_cast<size_t>(std::max(options_.global_min_support, options_.track_candidates) + 1))) {
     std::optional<Fix> fix = match(i, scan, mount, between(references_[i].pose, hit), false);
     if (fix && goodFix(*fix, true) && isNear(hit, fix->pose, options_.global_ambiguity_distance, params_.loop_ambiguity_heading))
       fixes.push_back(*fix);
@@ -245,11 +243,11 @@ std::optional<MapLocalizer::Fix> MapLocalizer::refineGlobalHit(const Pose2& hit,
   return best;
 }
 
-std::vector<Vec2> MapLocalizer::sequencePoints(const Pose2& predicted) const {
+std::vector<Vec2> MapLocalizer::sequencePoints(const std::vector<SearchedScan>& scans, const Pose2& pose) const {
   std::vector<Vec2> all;
-  for (const SearchedScan& searched : searched_) {
-    if (!isNear(searched.pose, predicted, options_.global_sequence_distance, 2.0 * M_PI)) continue;
-    const Pose2 into_current = between(predicted, searched.pose);
+  for (const SearchedScan& searched : scans) {
+    if (!isNear(searched.pose, pose, options_.global_sequence_distance, 2.0 * M_PI)) continue;
+    const Pose2 into_current = between(pose, searched.pose);
     for (const Vec2& p : searched.points) all.push_back(into_current.transform(p));
   }
   const size_t n = std::min(all.size(), static_cast<size_t>(std::max(1, options_.global_points)));
@@ -259,11 +257,11 @@ std::vector<Vec2> MapLocalizer::sequencePoints(const Pose2& predicted) const {
 }
 
 std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& raw, const PreparedScan& scan,
-                                                              const Pose2& predicted) {
+                                                              const std::vector<Vec2>& points) {
   ++stats_.global_searches;
   const CorrelativeQuery query{options_.global_min_score, options_.global_score_margin, options_.global_ambiguity_distance,
                                params_.loop_ambiguity_heading};
-  const CorrelativeSearchResult found = correlative_->find(sequencePoints(predicted), query);
+  const CorrelativeSearchResult found = correlative_->find(points, query);
   stats_.global_nodes += found.scored_nodes;
   // The places the scans fit about equally well: a place whose rays would pass through mapped walls
   // is not where the robot is (a corridor seen the wrong way round, a look-alike).
@@ -283,9 +281,34 @@ std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& r
   }
   std::optional<Fix> fix = refineGlobalHit(places.front().pose, scan, raw.laser_pose);
   if (!fix) return std::nullopt;
+  fix->score = places.front().score;
   fix->fit = field_->fit(raw, fix->pose);
   if (fix->fit < options_.global_min_fit) return std::nullopt;
   return fix;
+}
+
+bool MapLocalizer::doubt(const LaserScan& scan, const Pose2& tracked) {
+  if (nearestReferences(tracked, 1).empty() || field_->fit(scan, tracked) >= options_.doubt_max_fit) {
+    doubted_.clear();
+    last_doubt_at_.reset();
+    return false;
+  }
+  const std::optional<PreparedScan> prepared = prepareMatchableScan(scan, params_.psm);
+  if (!prepared) return false;
+  doubted_.push_back({tracked, searchPoints(scan)});
+  if (last_doubt_at_ && isNear(*last_doubt_at_, tracked, options_.global_search_spacing, options_.global_search_turn))
+    return false;
+  last_doubt_at_ = tracked;
+  ++stats_.doubt_searches;
+  const std::vector<Vec2> points = sequencePoints(doubted_, tracked);
+  const std::optional<Fix> place = searchGlobally(scan, *prepared, points);
+  if (!place || isNear(place->pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading))
+    return false;
+  // The place must explain the scans markedly better than the tracked pose does, as a rival must.
+  const double tracked_score = correlative_->score(points, tracked);
+  if (1.0 - tracked_score <= options_.global_misfit_ratio * (1.0 - place->score)) return false;
+  ++stats_.doubts;
+  return true;
 }
 
 void MapLocalizer::lose() {
@@ -294,6 +317,8 @@ void MapLocalizer::lose() {
   hypothesis_.reset();
   last_search_at_.reset();
   searched_.clear();
+  doubted_.clear();
+  last_doubt_at_.reset();
   local_reference_.reset();  // seen from where the robot may no longer be
   ++stats_.losses;
 }
@@ -316,7 +341,7 @@ bool MapLocalizer::searchDue(const Pose2& predicted) const {
 void MapLocalizer::searchAndConfirm(const LaserScan& raw, const PreparedScan& scan, const Pose2& predicted,
                                     MapLocalizationResult& result) {
   last_search_at_ = predicted;
-  const std::optional<Fix> hit = searchGlobally(raw, scan, predicted);
+  const std::optional<Fix> hit = searchGlobally(raw, scan, sequencePoints(searched_, predicted));
   if (!hit) {
     hypothesis_.reset();
     return;
@@ -351,7 +376,11 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
     result.usable = true;
     const Tracked tracked = track(*prepared, scan.laser_pose, result);
     failures_in_a_row_ = tracked == Tracked::Failed ? failures_in_a_row_ + 1 : 0;
-    if (failures_in_a_row_ >= options_.lost_after_scans || unmatched_near_map_ >= options_.lost_near_map_after_scans) {
+    if (doubt(scan, pose_)) {
+      const size_t doubted = doubted_.size() - 1;  // before this scan: re-placed with the rest
+      lose();
+      lost_since_ = online_.size() >= doubted ? online_.size() - doubted : 0;
+    } else if (failures_in_a_row_ >= options_.lost_after_scans || unmatched_near_map_ >= options_.lost_near_map_after_scans) {
       // The scans of the failed run (placed by odometry or the local reference): re-placed with the rest.
       const size_t failed = static_cast<size_t>(std::max(failures_in_a_row_, unmatched_near_map_)) - 1;
       lose();

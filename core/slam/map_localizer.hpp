@@ -76,6 +76,8 @@ struct MapLocalizerStats {
   size_t global_see_through = 0;   ///< hits refused for seeing through mapped walls
   size_t global_unsupported = 0;   ///< searches whose best hit too few reference scans found
   size_t global_unconfirmed = 0;   ///< unambiguous hits the next search did not agree with
+  size_t doubt_searches = 0;       ///< global searches while tracked, the fit having dropped
+  size_t doubts = 0;               ///< ... that found the robot elsewhere: tracking lost
   size_t fixes = 0;                ///< global searches that localized the robot
   size_t losses = 0;               ///< times tracking was lost (kidnapping, odometry failure)
   int64_t first_fix_scan = -1;     ///< scan index (0-based) of the first fix
@@ -92,6 +94,14 @@ class MapLocalizer {
   /// takes over. Used when something else tracked it meanwhile (map_localization_estimator.hpp);
   /// the odometry received since its last scan is dropped, the motion up to `pose` is in it.
   void searchFrom(const Pose2& pose, int64_t utime);
+  /// Doubt, while the robot is tracked (here or by temporary mapping) at `tracked` (map frame) on
+  /// this scan: true when it is elsewhere. Where the tracked pose is near the map's reference
+  /// scans but fits less than doubt_max_fit of the scan's readings to it, the scans seen since
+  /// the fit dropped, at their tracked poses, are searched for globally (every
+  /// global_search_spacing); an unambiguous place away from the tracked pose that they fit
+  /// markedly better (global_misfit_ratio) means the robot was carried there: lose it, and let
+  /// the global search confirm where.
+  bool doubt(const LaserScan& scan, const Pose2& tracked);
   /// Cumulative odometry; bad readings are counted by the integrator and ignored.
   void addOdometry(const OdometryReading& reading);
   /// One laser scan; never throws for bad content.
@@ -122,6 +132,7 @@ class MapLocalizer {
     double error_index = 0.0;
     double overlap = 0.0;
     double fit = 0.0;     ///< of the whole scan to the map at `pose` (global search)
+    double score = 0.0;   ///< of the searched points at the correlative search's pose
   };
   /// The last scan tied to the map (or to such a scan), at its pose and covariance: new ground
   /// is tracked against it.
@@ -149,6 +160,8 @@ class MapLocalizer {
   std::optional<Fix> match(size_t reference, const PreparedScan& scan, const Pose2& mount, const Pose2& relative_guess,
                            bool wide);
   bool goodFix(const Fix& fix, bool global) const;
+  /// The reference scans within track_radius and track_heading of `pose`, nearest first, at most `count`.
+  std::vector<size_t> nearestReferences(const Pose2& pose, size_t count) const;
   enum class Tracked { Matched, NewGround, Failed };
   /// Tracking: matches the nearest references and applies the best good match; else new ground.
   Tracked track(const PreparedScan& scan, const Pose2& mount, MapLocalizationResult& result);
@@ -167,11 +180,11 @@ class MapLocalizer {
   /// motion kept up (a good match just outside the gate is then taken, not rejected).
   bool odometryFaultExplains(const Pose2& measured) const;
   bool withinGate(const Vec3& innovation, const Mat3& innovation_cov) const;
-  /// Global search: the unambiguous best hit of this scan (and those before it, while lost), if any.
-  std::optional<Fix> searchGlobally(const LaserScan& raw, const PreparedScan& scan, const Pose2& predicted);
-  /// The scans seen while lost, within global_sequence_distance of `predicted`, as points in
-  /// its robot frame (placed by dead reckoning): at most global_points of them.
-  std::vector<Vec2> sequencePoints(const Pose2& predicted) const;
+  /// Global search: the unambiguous best hit of `points` (robot frame, `raw` the current scan), if any.
+  std::optional<Fix> searchGlobally(const LaserScan& raw, const PreparedScan& scan, const std::vector<Vec2>& points);
+  /// `scans` within global_sequence_distance of `pose`, as points in its robot frame: at most
+  /// global_points of them.
+  std::vector<Vec2> sequencePoints(const std::vector<SearchedScan>& scans, const Pose2& pose) const;
   /// The best hit refined by PSM with the reference scans nearest to it, if enough agree.
   std::optional<Fix> refineGlobalHit(const Pose2& hit, const PreparedScan& scan, const Pose2& mount);
   /// At most global_points of the scan's readings within max_range, in the robot frame.
@@ -201,6 +214,8 @@ class MapLocalizer {
   std::optional<LocalReference> local_reference_;
   std::optional<Pose2> last_search_at_;  ///< dead-reckoning pose of the last global search
   std::vector<SearchedScan> searched_;   ///< the scans since the loss, newest last
+  std::vector<SearchedScan> doubted_;    ///< tracked scans since the fit dropped, at their tracked poses
+  std::optional<Pose2> last_doubt_at_;   ///< tracked pose of the last doubt search
   std::optional<size_t> lost_since_;  ///< first scan of the current odometry-only stretch
 
   std::vector<PoseStamped> online_;

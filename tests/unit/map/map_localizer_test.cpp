@@ -179,10 +179,9 @@ class KidnapTally {
 };
 
 // 20 seeds: the robot is carried 4-12 m along the loop mid-run while its odometry notices nothing.
-// The localiser notices (along a look-alike corridor it may take about a hundred scans), flags its
-// poses as odometry only, and no fix, ever,
-// is more than 0.3 m from the truth (no wrong lock-on). How soon it is found again is printed;
-// issue 15's goal, within 20 scans, is met on 16 of 20 seeds (the others are noticed late).
+// The localiser notices (a doubt search finds the scans fit a place elsewhere much better; or they
+// match nothing), flags its poses as odometry only, and no fix, ever, is more than 0.3 m from the
+// truth (no wrong lock-on). Issue 15's goal: found again within 20 scans on every seed.
 TEST(MapLocalizer, AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace) {
   const std::vector<MapReference> map = mapOfOneLap();
   KidnapTally tally;
@@ -209,7 +208,7 @@ TEST(MapLocalizer, AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace) {
     tally.add(kidnapping, *noticed, found_again);
   }
   tally.print("MapLocalizer");
-  EXPECT_GE(tally.foundWithin20(), 16u) << "fewer kidnaps recovered within 20 scans than the correlative search gave";
+  EXPECT_EQ(tally.foundWithin20(), 20u) << "issue 15: every kidnap recovered within 20 scans";
 }
 
 /// Feeds `run` to `estimator` and finishes it; the report.
@@ -254,7 +253,8 @@ TEST(MapLocalization, AKnownStartTracksOverTheFixedMap) {
 // The kidnap of MapLocalizer.AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace with temporary
 // mapping (the default): scans near the map without a match with it lose the robot, the global
 // search finds it again, and every pose from a fix on is where the robot is. How soon is printed
-// (issue 15's goal: found again within 20 scans on every seed; met on 15 of 20).
+// (issue 15's goal: found again within 20 scans on every seed; met on 19 of 20, the other is
+// noticed late: along a look-alike stretch the tracked pose keeps fitting 90% of the scan).
 TEST(MapLocalization, AKidnappedRobotIsNoticedAndFoundAgainWhereItIs) {
   const StoredMap map = storedMapOfOneLap();
   KidnapTally tally;
@@ -282,7 +282,7 @@ TEST(MapLocalization, AKidnappedRobotIsNoticedAndFoundAgainWhereItIs) {
     tally.add(kidnapping, *noticed, found_again);
   }
   tally.print("temporary mapping");
-  EXPECT_GE(tally.foundWithin20(), 15u) << "fewer kidnaps recovered within 20 scans than the correlative search gave";
+  EXPECT_GE(tally.foundWithin20(), 19u) << "fewer kidnaps recovered within 20 scans than the doubt search gave";
 }
 
 TEST(MapContinuation, AKnownStartMapsOnInTheMapsFrameAndClosesLoopsWithIt) {
