@@ -218,29 +218,47 @@ std::vector<Vec2> MapLocalizer::searchPoints(const LaserScan& raw) const {
   return points;
 }
 
-std::optional<MapLocalizer::Fix> MapLocalizer::refineGlobalHit(const Pose2& hit, const PreparedScan& scan,
+// PSM places the scan to a few millimetres where it overlaps a reference scan; where none was taken
+// facing the same way (a robot turning where the map's run went straight) the search's own pose
+// stands, good to its grid. Refinements that disagree are conflicting evidence: no fix.
+std::optional<MapLocalizer::Fix> MapLocalizer::refineGlobalHit(const Pose2& hit, double score, const PreparedScan& scan,
                                                                const Pose2& mount) {
   std::vector<Fix> fixes;
-  for (const size_t i :
-       nearestReferences(hit, static_cast<size_t>(std::max(options_.global_min_support, options_.track_candidates) + 1))) {
+  for (const size_t i : nearestReferences(hit, static_cast<size_t>(options_.track_candidates + 1))) {
     std::optional<Fix> fix = match(i, scan, mount, between(references_[i].pose, hit), false);
     if (fix && goodFix(*fix, true) && isNear(hit, fix->pose, options_.global_ambiguity_distance, params_.loop_ambiguity_heading))
       fixes.push_back(*fix);
   }
   if (fixes.empty()) {
     ++stats_.global_unrefined;
-    return std::nullopt;
+    Fix fix;
+    fix.reference = nearestReference(hit);
+    fix.pose = hit;
+    const double sigma_xy = 2.0 * options_.global_resolution, sigma_theta = deg2rad(1.0);
+    fix.cov = Vec3(sigma_xy * sigma_xy, sigma_xy * sigma_xy, sigma_theta * sigma_theta).asDiagonal();
+    fix.score = score;
+    return fix;
   }
-  const Fix best = *std::min_element(fixes.begin(), fixes.end(),
-                                     [](const Fix& a, const Fix& b) { return a.error_index < b.error_index; });
-  const auto agree = std::count_if(fixes.begin(), fixes.end(), [&](const Fix& f) {
+  Fix best = *std::min_element(fixes.begin(), fixes.end(),
+                               [](const Fix& a, const Fix& b) { return a.error_index < b.error_index; });
+  const bool agree = std::all_of(fixes.begin(), fixes.end(), [&](const Fix& f) {
     return isNear(best.pose, f.pose, options_.confirm_translation, options_.confirm_rotation);
   });
-  if (agree < std::min<long>(options_.global_min_support, static_cast<long>(references_.size()))) {
+  if (!agree) {
     ++stats_.global_unsupported;
     return std::nullopt;
   }
+  best.score = score;
   return best;
+}
+
+size_t MapLocalizer::nearestReference(const Pose2& pose) const {
+  size_t nearest = 0;
+  for (size_t i = 1; i < references_.size(); ++i)
+    if ((references_[i].pose.translation() - pose.translation()).norm() <
+        (references_[nearest].pose.translation() - pose.translation()).norm())
+      nearest = i;
+  return nearest;
 }
 
 std::vector<Vec2> MapLocalizer::sequencePoints(const std::vector<SearchedScan>& scans, const Pose2& pose) const {
@@ -279,9 +297,8 @@ std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& r
     ++stats_.global_ambiguous;
     return std::nullopt;
   }
-  std::optional<Fix> fix = refineGlobalHit(places.front().pose, scan, raw.laser_pose);
+  std::optional<Fix> fix = refineGlobalHit(places.front().pose, places.front().score, scan, raw.laser_pose);
   if (!fix) return std::nullopt;
-  fix->score = places.front().score;
   fix->fit = field_->fit(raw, fix->pose);
   if (fix->fit < options_.global_min_fit) return std::nullopt;
   return fix;

@@ -72,9 +72,9 @@ struct MapLocalizerStats {
   size_t global_searches = 0;
   size_t global_nodes = 0;         ///< poses and pose ranges the global searches scored
   size_t global_ambiguous = 0;     ///< searches whose best pose had a look-alike elsewhere
-  size_t global_unrefined = 0;     ///< best poses PSM could not refine with a reference scan
+  size_t global_unrefined = 0;     ///< best poses PSM could not refine (the search's pose stood)
   size_t global_see_through = 0;   ///< hits refused for seeing through mapped walls
-  size_t global_unsupported = 0;   ///< searches whose best hit too few reference scans found
+  size_t global_unsupported = 0;   ///< best poses whose PSM refinements disagreed
   size_t global_unconfirmed = 0;   ///< unambiguous hits the next search did not agree with
   size_t doubt_searches = 0;       ///< global searches while tracked, the fit having dropped
   size_t doubts = 0;               ///< ... that found the robot elsewhere: tracking lost
@@ -185,8 +185,10 @@ class MapLocalizer {
   /// `scans` within global_sequence_distance of `pose`, as points in its robot frame: at most
   /// global_points of them.
   std::vector<Vec2> sequencePoints(const std::vector<SearchedScan>& scans, const Pose2& pose) const;
-  /// The best hit refined by PSM with the reference scans nearest to it, if enough agree.
-  std::optional<Fix> refineGlobalHit(const Pose2& hit, const PreparedScan& scan, const Pose2& mount);
+  /// The best hit refined by PSM with the reference scans nearest to it, unless they disagree.
+  std::optional<Fix> refineGlobalHit(const Pose2& hit, double score, const PreparedScan& scan, const Pose2& mount);
+  /// The reference scan nearest to `pose`'s position.
+  size_t nearestReference(const Pose2& pose) const;
   /// At most global_points of the scan's readings within max_range, in the robot frame.
   std::vector<Vec2> searchPoints(const LaserScan& raw) const;
   void lose();

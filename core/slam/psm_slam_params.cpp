@@ -134,7 +134,6 @@ void describeLocalization(ParameterTable& t, MapLocalizationParams& p) {
   t.number("global_max_see_through", p.global_max_see_through, 0.0, 1.0, "fraction of rays through mapped walls at most");
   t.number("global_see_through_clearance", p.global_see_through_clearance, 0.0, 100.0,
            "m from either end of a ray not checked");
-  t.integer("global_min_support", p.global_min_support, 1, 1000, "reference scans whose refinement must agree");
   t.number("doubt_max_fit", p.doubt_max_fit, 0.0, 1.0, "while tracked near the map, a scan fitting less searches globally");
   t.number("confirm_translation", p.confirm_translation, 0.0, 100.0, "m: two hits agree after the odometry");
   t.angle("confirm_rotation_deg", p.confirm_rotation, 0.0, 180.0, "the same for heading");

@@ -65,10 +65,6 @@ struct MapLocalizationParams {
   /// (Not applied to tracking: rays grazing door jambs would count, and a tracked pose is local.)
   double global_max_see_through = 0.1;
   double global_see_through_clearance = 0.5;  ///< m
-  /// The refinement must come out the same (within confirm_translation / confirm_rotation) from at
-  /// least this many different reference scans: a place that is really in the map is seen from
-  /// its neighbouring reference scans too, a chance fit usually from one.
-  int global_min_support = 2;
   double global_ambiguity_distance = 0.5;  ///< m
   /// While tracked: a scan near the map's reference scans with less than this fraction of its
   /// readings within global_fit_distance of the map starts a doubt (MapLocalizer::doubt).

@@ -16,6 +16,7 @@
 #include <string>
 
 #include "eval/relation_metric.hpp"
+#include "eval/trajectory_lookup.hpp"
 #include "io/relations.hpp"
 #include "pipeline/map_then_localize.hpp"
 
@@ -99,10 +100,15 @@ int main(int argc, char** argv) {
   // Better: a relation across the split ties a second-half scan to a first-half one that saw the
   // same place, whose pose the map holds; the nearest such scan, moved on by full-run SLAM over the
   // few seconds between, is where the robot is in the map.
+  const TrajectoryLookup mapped_lookup(result.mapped), full_lookup(full_poses);
+  const int64_t tolerance = RelationMetricOptions{}.max_time_difference_us;
   auto mappedPose = [&](int64_t utime) -> std::optional<Pose2> {
-    const auto at = std::find_if(result.mapped.begin(), result.mapped.end(), [&](const PoseStamped& p) { return p.utime == utime; });
-    if (at == result.mapped.end()) return std::nullopt;
-    return at->pose;
+    const PoseStamped* p = mapped_lookup.nearest(utime, tolerance);
+    return p ? std::optional<Pose2>(p->pose) : std::nullopt;
+  };
+  auto lookedUpFullPose = [&](int64_t utime) -> std::optional<Pose2> {
+    const PoseStamped* p = full_lookup.nearest(utime, tolerance);
+    return p ? std::optional<Pose2>(p->pose) : std::nullopt;
   };
   auto relatedPose = [&](int64_t utime) -> std::optional<Pose2> {
     std::optional<Pose2> best;
@@ -111,7 +117,8 @@ int main(int argc, char** argv) {
       const bool second_is_t2 = r.t2 >= split;
       const int64_t second = second_is_t2 ? r.t2 : r.t1, first = second_is_t2 ? r.t1 : r.t2;
       const int64_t gap = std::abs(second - utime);
-      const std::optional<Pose2> mapped = mappedPose(first), full_second = fullPose(second), full_here = fullPose(utime);
+      const std::optional<Pose2> mapped = mappedPose(first), full_second = lookedUpFullPose(second),
+                                 full_here = lookedUpFullPose(utime);
       if (gap >= best_gap || !mapped || !full_second || !full_here) continue;
       const Pose2 second_in_map = *mapped * (second_is_t2 ? r.motion() : r.motion().inverse());
       best = second_in_map * between(*full_second, *full_here);
