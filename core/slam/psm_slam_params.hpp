@@ -28,7 +28,7 @@ struct MapLocalizationParams {
   int lost_after_scans = 5;
   /// This many scans in a row with reference scans within track_radius but no match with the map
   /// (even if new-ground tracking placed them): lost too.
-  int lost_near_map_after_scans = 15;
+  int lost_near_map_after_scans = 100;
   /// On new ground, the robot is lost once its position's standard deviation exceeds this:
   /// tracking could not pick the map up from so vague a pose.
   double max_off_map_sigma = 1.0;        ///< m
