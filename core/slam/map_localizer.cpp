@@ -261,10 +261,16 @@ size_t MapLocalizer::nearestReference(const Pose2& pose) const {
   return nearest;
 }
 
+void MapLocalizer::keepRecent(std::vector<SearchedScan>& scans, SearchedScan latest) const {
+  scans.push_back(std::move(latest));
+  const Pose2 now = scans.back().pose;
+  std::erase_if(scans, [&](const SearchedScan& s) { return !isNear(s.pose, now, options_.global_sequence_distance, 2.0 * M_PI); });
+  if (scans.size() > kMaxSequenceScans) scans.erase(scans.begin(), scans.end() - static_cast<long>(kMaxSequenceScans));
+}
+
 std::vector<Vec2> MapLocalizer::sequencePoints(const std::vector<SearchedScan>& scans, const Pose2& pose) const {
   std::vector<Vec2> all;
   for (const SearchedScan& searched : scans) {
-    if (!isNear(searched.pose, pose, options_.global_sequence_distance, 2.0 * M_PI)) continue;
     const Pose2 into_current = between(pose, searched.pose);
     for (const Vec2& p : searched.points) all.push_back(into_current.transform(p));
   }
@@ -312,7 +318,7 @@ bool MapLocalizer::doubt(const LaserScan& scan, const Pose2& tracked) {
   }
   const std::optional<PreparedScan> prepared = prepareMatchableScan(scan, params_.psm);
   if (!prepared) return false;
-  doubted_.push_back({tracked, searchPoints(scan)});
+  keepRecent(doubted_, {tracked, searchPoints(scan)});
   if (last_doubt_at_ && isNear(*last_doubt_at_, tracked, options_.global_search_spacing, options_.global_search_turn))
     return false;
   last_doubt_at_ = tracked;
@@ -394,7 +400,7 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
     const Tracked tracked = track(*prepared, scan.laser_pose, result);
     failures_in_a_row_ = tracked == Tracked::Failed ? failures_in_a_row_ + 1 : 0;
     if (doubt(scan, pose_)) {
-      const size_t doubted = doubted_.size() - 1;  // before this scan: re-placed with the rest
+      const size_t doubted = doubted_.size() - 1;  // the doubted scans before this one: re-placed with the rest
       lose();
       lost_since_ = online_.size() >= doubted ? online_.size() - doubted : 0;
     } else if (failures_in_a_row_ >= options_.lost_after_scans || unmatched_near_map_ >= options_.lost_near_map_after_scans) {
@@ -408,7 +414,7 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
     }
   } else {
     result.usable = true;
-    searched_.push_back({predicted, searchPoints(scan)});
+    keepRecent(searched_, {predicted, searchPoints(scan)});
     if (searchDue(predicted)) searchAndConfirm(scan, *prepared, predicted, result);
     if (localized_) searched_.clear();
   }

@@ -182,9 +182,12 @@ class MapLocalizer {
   bool withinGate(const Vec3& innovation, const Mat3& innovation_cov) const;
   /// Global search: the unambiguous best hit of `points` (robot frame, `raw` the current scan), if any.
   std::optional<Fix> searchGlobally(const LaserScan& raw, const PreparedScan& scan, const std::vector<Vec2>& points);
-  /// `scans` within global_sequence_distance of `pose`, as points in its robot frame: at most
-  /// global_points of them.
+  /// The points of `scans` in `pose`'s robot frame: at most global_points of them.
   std::vector<Vec2> sequencePoints(const std::vector<SearchedScan>& scans, const Pose2& pose) const;
+  /// Adds `latest` to `scans` and drops those beyond global_sequence_distance of it, or more than
+  /// kMaxSequenceScans back (a robot standing still): the list stays bounded however long it is lost.
+  void keepRecent(std::vector<SearchedScan>& scans, SearchedScan latest) const;
+  static constexpr size_t kMaxSequenceScans = 400;
   /// The best hit refined by PSM with the reference scans nearest to it, unless they disagree.
   std::optional<Fix> refineGlobalHit(const Pose2& hit, double score, const PreparedScan& scan, const Pose2& mount);
   /// The reference scan nearest to `pose`'s position.
