@@ -174,6 +174,25 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
   return result;
 }
 
+CorrelativeHit CorrelativeMapSearch::refine(const std::vector<Vec2>& points, const Pose2& pose, double translation,
+                                            double rotation) const {
+  CorrelativeHit best{pose, score(points, pose)};
+  double reach = params_.resolution;
+  for (const Vec2& p : points)
+    if (p.allFinite()) reach = std::max(reach, p.norm());
+  const double step = params_.resolution / reach;
+  const int cells = static_cast<int>(std::ceil(std::max(0.0, translation) / params_.resolution));
+  const int turns = std::min(static_cast<int>(std::ceil(std::max(0.0, rotation) / step)), 10000);
+  for (int t = -turns; t <= turns; ++t)
+    for (int j = -cells; j <= cells; ++j)
+      for (int i = -cells; i <= cells; ++i) {
+        const Pose2 candidate(pose.x + i * params_.resolution, pose.y + j * params_.resolution, wrapAngle(pose.theta + t * step));
+        const double s = score(points, candidate);
+        if (s > best.score) best = {candidate, s};
+      }
+  return best;
+}
+
 double CorrelativeMapSearch::score(const std::vector<Vec2>& points, const Pose2& pose) const {
   if (levels_.empty() || points.empty()) return 0.0;
   const double c = std::cos(pose.theta), s = std::sin(pose.theta), res = params_.resolution;

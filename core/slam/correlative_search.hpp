@@ -59,6 +59,10 @@ class CorrelativeMapSearch {
   /// The best robot pose for `points` (robot frame), if any scores at least query.min_score.
   CorrelativeSearchResult find(const std::vector<Vec2>& points, const CorrelativeQuery& query) const;
 
+  /// The best pose for `points` within ±`translation` and ±`rotation` of `pose`, every
+  /// resolution step and heading step scored (a small window: places a scan where a search of
+  /// several scans, placed by odometry, found the place).
+  CorrelativeHit refine(const std::vector<Vec2>& points, const Pose2& pose, double translation, double rotation) const;
   /// Mean score of `points` (robot frame) with the robot at `pose`.
   double score(const std::vector<Vec2>& points, const Pose2& pose) const;
   /// The robot positions searched lie on origin() + resolution · (i, j).

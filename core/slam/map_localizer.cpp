@@ -303,7 +303,9 @@ std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& r
     ++stats_.global_ambiguous;
     return std::nullopt;
   }
-  std::optional<Fix> fix = refineGlobalHit(places.front().pose, places.front().score, scan, raw.laser_pose);
+  // Odometry bends a sequence of scans a little: the current scan alone places the robot.
+  const CorrelativeHit here = correlative_->refine(searchPoints(raw), places.front().pose, kRefineTranslation, kRefineRotation);
+  std::optional<Fix> fix = refineGlobalHit(here.pose, places.front().score, scan, raw.laser_pose);
   if (!fix) return std::nullopt;
   fix->fit = field_->fit(raw, fix->pose);
   if (fix->fit < options_.global_min_fit) return std::nullopt;

@@ -188,6 +188,9 @@ class MapLocalizer {
   /// kMaxSequenceScans back (a robot standing still): the list stays bounded however long it is lost.
   void keepRecent(std::vector<SearchedScan>& scans, SearchedScan latest) const;
   static constexpr size_t kMaxSequenceScans = 400;
+  /// The window around the search's pose in which the current scan alone is placed.
+  static constexpr double kRefineTranslation = 0.3;  ///< m
+  static constexpr double kRefineRotation = deg2rad(8.0);
   /// The best hit refined by PSM with the reference scans nearest to it, unless they disagree.
   std::optional<Fix> refineGlobalHit(const Pose2& hit, double score, const PreparedScan& scan, const Pose2& mount);
   /// The reference scan nearest to `pose`'s position.

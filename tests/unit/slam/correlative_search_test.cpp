@@ -96,6 +96,20 @@ TEST(CorrelativeMapSearch, PlacesAScanOfTheLoopWhereItWasTaken) {
   EXPECT_GT(best.score, 0.8);
 }
 
+TEST(CorrelativeMapSearch, RefinePlacesAScanFromAPoseNearBy) {
+  const LoopMap loop;
+  const CorrelativeMapSearch search(loop.points, loop.positions, CorrelativeSearchParams{});
+  const Pose2 truth(-2.0, -3.0, 0.1);
+  const std::vector<Vec2> points = scanPoints(truth, 98);
+  const Pose2 off(truth.x + 0.15, truth.y - 0.1, truth.theta + deg2rad(5.0));
+  const CorrelativeHit refined = search.refine(points, off, 0.3, deg2rad(8.0));
+  EXPECT_LT((refined.pose.translation() - truth.translation()).norm(), 0.06);
+  EXPECT_LT(std::abs(wrapAngle(refined.pose.theta - truth.theta)), deg2rad(0.6));
+  EXPECT_GT(refined.score, search.score(points, off));
+  const CorrelativeHit stay = search.refine(points, off, 0.0, 0.0);
+  EXPECT_EQ(stay.score, search.score(points, off)) << "a zero window scores the pose itself";
+}
+
 TEST(CorrelativeMapSearch, ASymmetricMapGivesEveryLookAlikePlace) {
   // A square room: a scan of it fits at four headings.
   const std::vector<Vec2> map = pointsOf({{{0, 0}, {4, 0}}, {{4, 0}, {4, 4}}, {{4, 4}, {0, 4}}, {{0, 4}, {0, 0}}}, 0.05);
