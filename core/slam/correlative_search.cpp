@@ -101,6 +101,12 @@ double CorrelativeMapSearch::nodeScore(const RotatedPoints& rotated, int level, 
   return rotated.dx.empty() ? 0.0 : sum / (kScoreScale * static_cast<double>(rotated.dx.size()));
 }
 
+// A heading step that moves a point `reach` away by at most one cell (Hess et al., (7)).
+double CorrelativeMapSearch::headingStep(double reach) const {
+  const double res = params_.resolution, r = std::max(reach, res);
+  return std::acos(std::clamp(1.0 - res * res / (2.0 * r * r), -1.0, 1.0));
+}
+
 Pose2 CorrelativeMapSearch::poseOf(const RotatedPoints& rotated, int x, int y) const {
   return Pose2(origin_.x() + x * params_.resolution, origin_.y() + y * params_.resolution, rotated.theta);
 }
@@ -118,9 +124,8 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
       reach = std::max(reach, p.norm());
     }
   if (usable.empty()) return result;
-  // A heading step that moves the farthest point by at most one cell (Hess et al., (7)).
   const double res = params_.resolution;
-  const double step = std::acos(std::clamp(1.0 - res * res / (2.0 * std::max(reach, res) * std::max(reach, res)), -1.0, 1.0));
+  const double step = headingStep(reach);
   const int headings = std::max(1, static_cast<int>(std::ceil(2.0 * std::numbers::pi / step)));
   std::vector<RotatedPoints> rotations(static_cast<size_t>(headings));
   const int top = params_.levels - 1, span = 1 << top;
@@ -177,10 +182,10 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
 CorrelativeHit CorrelativeMapSearch::refine(const std::vector<Vec2>& points, const Pose2& pose, double translation,
                                             double rotation) const {
   CorrelativeHit best{pose, score(points, pose)};
-  double reach = params_.resolution;
+  double reach = 0.0;
   for (const Vec2& p : points)
     if (p.allFinite()) reach = std::max(reach, p.norm());
-  const double step = params_.resolution / reach;
+  const double step = headingStep(reach);
   const int cells = static_cast<int>(std::ceil(std::max(0.0, translation) / params_.resolution));
   const int turns = std::min(static_cast<int>(std::ceil(std::max(0.0, rotation) / step)), 10000);
   for (int t = -turns; t <= turns; ++t)

@@ -83,6 +83,7 @@ class CorrelativeMapSearch {
   int cellValue(int level, int x, int y) const;
   double nodeScore(const RotatedPoints& rotated, int level, int x, int y) const;
   bool regionAllows(int level, int x, int y) const;
+  double headingStep(double reach) const;
   Pose2 poseOf(const RotatedPoints& rotated, int x, int y) const;
 
   CorrelativeSearchParams params_;

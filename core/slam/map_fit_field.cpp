@@ -20,14 +20,21 @@ void forEachEndpoint(const LaserScan& scan, const Pose2& robot, double max_range
 
 }  // namespace
 
-MapFitField::MapFitField(const std::vector<LaserScan>& scans, const std::vector<Pose2>& poses, double max_range,
-                         double fit_distance, double resolution)
-    : max_range_(max_range), resolution_(resolution) {
+std::vector<Vec2> mapEndpoints(const std::vector<LaserScan>& scans, const std::vector<Pose2>& poses, double max_range) {
   std::vector<Vec2> points;
   for (size_t k = 0; k < scans.size() && k < poses.size(); ++k)
     forEachEndpoint(scans[k], poses[k], max_range, [&](const Vec2& p) {
       if (p.allFinite()) points.push_back(p);
     });
+  return points;
+}
+
+MapFitField::MapFitField(const std::vector<LaserScan>& scans, const std::vector<Pose2>& poses, double max_range,
+                         double fit_distance, double resolution)
+    : MapFitField(mapEndpoints(scans, poses, max_range), max_range, fit_distance, resolution) {}
+
+MapFitField::MapFitField(const std::vector<Vec2>& points, double max_range, double fit_distance, double resolution)
+    : max_range_(max_range), resolution_(resolution) {
   if (points.empty()) return;
   Vec2 lo = points.front(), hi = points.front();
   for (const Vec2& p : points) {

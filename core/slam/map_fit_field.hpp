@@ -14,12 +14,18 @@
 
 namespace polarslam {
 
+/// The endpoints of `scans[i]`'s readings within `max_range`, taken from robot pose `poses[i]`,
+/// in the map frame (non-finite ones left out).
+std::vector<Vec2> mapEndpoints(const std::vector<LaserScan>& scans, const std::vector<Pose2>& poses, double max_range);
+
 class MapFitField {
  public:
   /// `scans[i]` taken from robot pose `poses[i]` (map frame); readings beyond `max_range` are
   /// left out. `resolution` in m per cell.
   MapFitField(const std::vector<LaserScan>& scans, const std::vector<Pose2>& poses, double max_range,
               double fit_distance, double resolution = 0.05);
+  /// The same from the map's points (mapEndpoints of its scans within `max_range`).
+  MapFitField(const std::vector<Vec2>& points, double max_range, double fit_distance, double resolution = 0.05);
 
   /// Fraction of `scan`'s readings within max_range whose endpoint, with the robot at `pose`,
   /// lies within fit_distance of the map; 0 for a scan with none.

@@ -15,6 +15,15 @@ namespace {
 
 Vec3 poseDifference(const Pose2& a, const Pose2& b) { return {a.x - b.x, a.y - b.y, wrapAngle(a.theta - b.theta)}; }
 
+/// At most `count` of `items`, evenly spread over them.
+template <typename T>
+std::vector<T> evenlyThinned(const std::vector<T>& items, int count) {
+  const size_t n = std::min(items.size(), static_cast<size_t>(std::max(1, count)));
+  std::vector<T> kept;
+  for (size_t k = 0; k < n; ++k) kept.push_back(items[k * items.size() / n]);
+  return kept;
+}
+
 /// Standard deviation of the position along its most uncertain direction.
 double positionSigma(const Mat3& cov) {
   return std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(cov.topLeftCorner<2, 2>()).eigenvalues().maxCoeff()));
@@ -34,13 +43,9 @@ MapLocalizer::MapLocalizer(const std::vector<MapReference>& references, PsmSlamP
     if (prepared && finitePose(r.pose)) references_.push_back({r.id, r.pose, r.scan.laser_pose, std::move(*prepared)});
   }
   if (references_.empty()) throw std::invalid_argument("the map has no usable reference scan to localise against");
-  field_.emplace(scans, poses, params_.psm.max_range, options_.global_fit_distance);
-  std::vector<Vec2> map_points, positions;
-  for (size_t k = 0; k < scans.size(); ++k) {
-    const Pose2 laser = poses[k] * scans[k].laser_pose;
-    for (size_t i = 0; i < scans[k].size(); ++i)
-      if (scans[k].valid(i) && scans[k].ranges[i] <= params_.psm.max_range) map_points.push_back(laser.transform(scans[k].point(i)));
-  }
+  const std::vector<Vec2> map_points = mapEndpoints(scans, poses, params_.psm.max_range);
+  field_.emplace(map_points, params_.psm.max_range, options_.global_fit_distance);
+  std::vector<Vec2> positions;
   for (const Reference& r : references_) positions.push_back(r.pose.translation());
   correlative_.emplace(map_points, positions,
                        CorrelativeSearchParams{options_.global_resolution, options_.global_sigma, options_.global_region_radius});
@@ -211,10 +216,8 @@ std::vector<Vec2> MapLocalizer::searchPoints(const LaserScan& raw) const {
   std::vector<size_t> readings;
   for (size_t i = 0; i < raw.size(); ++i)
     if (raw.valid(i) && raw.ranges[i] <= params_.psm.max_range) readings.push_back(i);
-  const size_t wanted = static_cast<size_t>(std::max(1, options_.global_points));
-  const size_t n = std::min(wanted, readings.size());
   std::vector<Vec2> points;
-  for (size_t k = 0; k < n; ++k) points.push_back(raw.laser_pose.transform(raw.point(readings[k * readings.size() / n])));
+  for (const size_t i : evenlyThinned(readings, options_.global_points)) points.push_back(raw.laser_pose.transform(raw.point(i)));
   return points;
 }
 
@@ -274,10 +277,7 @@ std::vector<Vec2> MapLocalizer::sequencePoints(const std::vector<SearchedScan>& 
     const Pose2 into_current = between(pose, searched.pose);
     for (const Vec2& p : searched.points) all.push_back(into_current.transform(p));
   }
-  const size_t n = std::min(all.size(), static_cast<size_t>(std::max(1, options_.global_points)));
-  std::vector<Vec2> points;
-  for (size_t k = 0; k < n; ++k) points.push_back(all[k * all.size() / n]);
-  return points;
+  return evenlyThinned(all, options_.global_points);
 }
 
 std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& raw, const PreparedScan& scan,

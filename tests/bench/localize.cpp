@@ -79,11 +79,14 @@ int main(int argc, char** argv) {
   const RelationMetric full_across = evaluateRelations(full_run.trajectory(), across_split);
   const RelationMetric joined_across = evaluateRelations(result.joined, across_split);
   const std::vector<PoseStamped>& full_poses = full_run.trajectory();
-  auto fullPose = [&](int64_t utime) -> std::optional<Pose2> {
-    const auto at = std::find_if(full_poses.begin(), full_poses.end(), [&](const PoseStamped& p) { return p.utime == utime; });
-    if (at == full_poses.end()) return std::nullopt;
-    return at->pose;
+  // Poses looked up by time as the relation metric does (a scan's own stamp finds that scan).
+  const int64_t tolerance = RelationMetricOptions{}.max_time_difference_us;
+  auto poseAt = [tolerance](const TrajectoryLookup& lookup, int64_t utime) -> std::optional<Pose2> {
+    const PoseStamped* p = lookup.nearest(utime, tolerance);
+    return p ? std::optional<Pose2>(p->pose) : std::nullopt;
   };
+  const TrajectoryLookup full_lookup(full_poses), mapped_lookup(result.mapped);
+  auto fullPose = [&](int64_t utime) { return poseAt(full_lookup, utime); };
   // Full-run SLAM places both halves in one frame: a second-half scan whose full-run pose is
   // within 2 m and 90° of a first-half pose is in a mapped place (the share is printed).
   auto mappedPlace = [&](int64_t utime) {
@@ -100,16 +103,6 @@ int main(int argc, char** argv) {
   // Better: a relation across the split ties a second-half scan to a first-half one that saw the
   // same place, whose pose the map holds; the nearest such scan, moved on by full-run SLAM over the
   // few seconds between, is where the robot is in the map.
-  const TrajectoryLookup mapped_lookup(result.mapped), full_lookup(full_poses);
-  const int64_t tolerance = RelationMetricOptions{}.max_time_difference_us;
-  auto mappedPose = [&](int64_t utime) -> std::optional<Pose2> {
-    const PoseStamped* p = mapped_lookup.nearest(utime, tolerance);
-    return p ? std::optional<Pose2>(p->pose) : std::nullopt;
-  };
-  auto lookedUpFullPose = [&](int64_t utime) -> std::optional<Pose2> {
-    const PoseStamped* p = full_lookup.nearest(utime, tolerance);
-    return p ? std::optional<Pose2>(p->pose) : std::nullopt;
-  };
   auto relatedPose = [&](int64_t utime) -> std::optional<Pose2> {
     std::optional<Pose2> best;
     int64_t best_gap = 10'000'000;  // µs: relations farther in time than this are not used
@@ -117,8 +110,8 @@ int main(int argc, char** argv) {
       const bool second_is_t2 = r.t2 >= split;
       const int64_t second = second_is_t2 ? r.t2 : r.t1, first = second_is_t2 ? r.t1 : r.t2;
       const int64_t gap = std::abs(second - utime);
-      const std::optional<Pose2> mapped = mappedPose(first), full_second = lookedUpFullPose(second),
-                                 full_here = lookedUpFullPose(utime);
+      const std::optional<Pose2> mapped = poseAt(mapped_lookup, first), full_second = fullPose(second),
+                                 full_here = fullPose(utime);
       if (gap >= best_gap || !mapped || !full_second || !full_here) continue;
       const Pose2 second_in_map = *mapped * (second_is_t2 ? r.motion() : r.motion().inverse());
       best = second_in_map * between(*full_second, *full_here);
@@ -127,10 +120,12 @@ int main(int argc, char** argv) {
     return best;
   };
   size_t in_mapped_places = 0, fixes_right = 0, fixes_wrong = 0;
+  std::vector<bool> in_mapped_place;
+  for (const PoseStamped& p : result.online) in_mapped_place.push_back(mappedPlace(p.utime));
   std::string mapped_stretches;  // "first-last" scan ranges in mapped places
   std::optional<size_t> stretch_start;
-  for (size_t k = 0; k <= result.online.size(); ++k) {
-    const bool mapped = k < result.online.size() && mappedPlace(result.online[k].utime);
+  for (size_t k = 0; k <= in_mapped_place.size(); ++k) {
+    const bool mapped = k < in_mapped_place.size() && in_mapped_place[k];
     if (mapped && !stretch_start) stretch_start = k;
     if (!mapped && stretch_start) {
       mapped_stretches += " " + std::to_string(*stretch_start) + "-" + std::to_string(k - 1);
@@ -138,7 +133,7 @@ int main(int argc, char** argv) {
     }
   }
   for (size_t k = 0; k < result.online.size(); ++k) {
-    in_mapped_places += mappedPlace(result.online[k].utime);
+    in_mapped_places += in_mapped_place[k];
     if (!result.tied_to_map[k] || (k > 0 && result.tied_to_map[k - 1])) continue;
     const std::optional<Pose2> full_here = fullPose(result.online[k].utime);
     if (!full_at_split || !full_here) continue;
