@@ -10,16 +10,26 @@ namespace {
 
 constexpr double kScoreScale = 255.0;
 
-/// Level k from level k − 1: the maximum over the 2 × 2 windows of 2^(k−1) cells from each cell.
+/// Level k from level k − 1: the maximum over the 2 × 2 windows of 2^(k−1) cells from each cell,
+/// taken along rows, then along columns (cells beyond the grid count as 0).
 std::vector<uint8_t> poolMax(const std::vector<uint8_t>& finer, int width, int height, int half) {
-  std::vector<uint8_t> coarser(finer.size());
-  auto at = [&](int x, int y) -> uint8_t {
-    return x < width && y < height ? finer[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)] : 0;
-  };
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x)
-      coarser[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)] =
-          std::max({at(x, y), at(x + half, y), at(x, y + half), at(x + half, y + half)});
+  const size_t w = static_cast<size_t>(width), h = static_cast<size_t>(height), step = static_cast<size_t>(half);
+  std::vector<uint8_t> rows(finer.size()), coarser(finer.size());
+  for (size_t y = 0; y < h; ++y) {
+    const uint8_t* in = &finer[y * w];
+    uint8_t* out = &rows[y * w];
+    const size_t inside = w > step ? w - step : 0;
+    for (size_t x = 0; x < inside; ++x) out[x] = std::max(in[x], in[x + step]);
+    for (size_t x = inside; x < w; ++x) out[x] = in[x];
+  }
+  const size_t inside = h > step ? h - step : 0;
+  for (size_t y = 0; y < inside; ++y) {
+    const uint8_t* a = &rows[y * w];
+    const uint8_t* b = &rows[(y + step) * w];
+    uint8_t* out = &coarser[y * w];
+    for (size_t x = 0; x < w; ++x) out[x] = std::max(a[x], b[x]);
+  }
+  std::copy(rows.begin() + static_cast<long>(inside * w), rows.end(), coarser.begin() + static_cast<long>(inside * w));
   return coarser;
 }
 
@@ -50,28 +60,35 @@ CorrelativeMapSearch::CorrelativeMapSearch(const std::vector<Vec2>& map_points,
   const size_t cells = static_cast<size_t>(width_) * static_cast<size_t>(height_);
 
   // Both rasters stamp a disc around each point: the score grid exp(-d²/2σ²) out to 3σ, the
-  // region the reference positions' discs.
-  auto stamp = [&](std::vector<uint8_t>& grid, const Vec2& p, double radius, auto value) {
+  // region the reference positions' discs. The value of a cell is looked up by d², finely binned.
+  constexpr int kBins = 4096;
+  auto stamp = [&](std::vector<uint8_t>& grid, const Vec2& p, double radius, const std::vector<uint8_t>& value_by_d2) {
     const double cx = (p.x() - origin_.x()) / res, cy = (p.y() - origin_.y()) / res;
+    const double r2 = (radius / res) * (radius / res), bins_per_d2 = (kBins - 1) / r2;
     const int reach = static_cast<int>(std::ceil(radius / res)) + 1;
-    for (int y = static_cast<int>(cy) - reach; y <= static_cast<int>(cy) + reach; ++y)
-      for (int x = static_cast<int>(cx) - reach; x <= static_cast<int>(cx) + reach; ++x) {
-        if (x < 0 || y < 0 || x >= width_ || y >= height_) continue;
-        const double d = res * std::hypot(x + 0.5 - cx, y + 0.5 - cy);
-        if (d > radius) continue;
-        uint8_t& cell = grid[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
-        cell = std::max(cell, value(d));
+    const int x0 = std::max(0, static_cast<int>(cx) - reach), x1 = std::min(width_ - 1, static_cast<int>(cx) + reach);
+    const int y0 = std::max(0, static_cast<int>(cy) - reach), y1 = std::min(height_ - 1, static_cast<int>(cy) + reach);
+    for (int y = y0; y <= y1; ++y) {
+      const double ey = y + 0.5 - cy;
+      uint8_t* row = &grid[static_cast<size_t>(y) * static_cast<size_t>(width_)];
+      for (int x = x0; x <= x1; ++x) {
+        const double ex = x + 0.5 - cx, d2 = ex * ex + ey * ey;
+        if (d2 > r2) continue;
+        row[x] = std::max(row[x], value_by_d2[static_cast<size_t>(d2 * bins_per_d2)]);
       }
+    }
   };
   std::vector<uint8_t> score(cells, 0), region(cells, 0);
-  const double sigma = params_.sigma;
-  for (const Vec2& p : finite_points)
-    stamp(score, p, 3.0 * sigma, [&](double d) {
-      return static_cast<uint8_t>(std::lround(kScoreScale * std::exp(-0.5 * d * d / (sigma * sigma))));
-    });
+  const double sigma = params_.sigma, score_radius = 3.0 * sigma;
+  std::vector<uint8_t> likelihood(kBins), inside(kBins, 1);
+  for (int i = 0; i < kBins; ++i) {
+    const double d2 = score_radius * score_radius * i / (kBins - 1);  // in m²
+    likelihood[static_cast<size_t>(i)] = static_cast<uint8_t>(std::lround(kScoreScale * std::exp(-0.5 * d2 / (sigma * sigma))));
+  }
+  for (const Vec2& p : finite_points) stamp(score, p, score_radius, likelihood);
   // A robot position is a cell corner (origin + cell · resolution): shift by half a cell.
   for (const Vec2& p : finite_references)
-    stamp(region, p + Vec2(0.5 * res, 0.5 * res), params_.region_radius, [](double) { return uint8_t{1}; });
+    stamp(region, p + Vec2(0.5 * res, 0.5 * res), params_.region_radius, inside);
   levels_.push_back(std::move(score));
   region_.push_back(std::move(region));
   for (int k = 1; k < params_.levels; ++k) {
@@ -96,9 +113,16 @@ bool CorrelativeMapSearch::regionAllows(int level, int x, int y) const {
 }
 
 double CorrelativeMapSearch::nodeScore(const RotatedPoints& rotated, int level, int x, int y) const {
+  if (rotated.dx.empty()) return 0.0;
   int sum = 0;
-  for (size_t i = 0; i < rotated.dx.size(); ++i) sum += cellValue(level, x + rotated.dx[i], y + rotated.dy[i]);
-  return rotated.dx.empty() ? 0.0 : sum / (kScoreScale * static_cast<double>(rotated.dx.size()));
+  if (x + rotated.min_dx >= 0 && y + rotated.min_dy >= 0 && x + rotated.max_dx < width_ && y + rotated.max_dy < height_) {
+    // Every point lands in the grid (the usual case): no clamping.
+    const uint8_t* base = &levels_[static_cast<size_t>(level)][static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
+    for (const std::ptrdiff_t offset : rotated.offsets) sum += base[offset];
+  } else {
+    for (size_t i = 0; i < rotated.dx.size(); ++i) sum += cellValue(level, x + rotated.dx[i], y + rotated.dy[i]);
+  }
+  return sum / (kScoreScale * static_cast<double>(rotated.dx.size()));
 }
 
 // A heading step that moves a point `reach` away by at most one cell (Hess et al., (7)).
@@ -140,7 +164,12 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
     for (const Vec2& p : usable) {
       rotated.dx.push_back(static_cast<int>(std::floor((c * p.x() - s * p.y()) / res)));
       rotated.dy.push_back(static_cast<int>(std::floor((s * p.x() + c * p.y()) / res)));
+      rotated.offsets.push_back(static_cast<std::ptrdiff_t>(rotated.dy.back()) * width_ + rotated.dx.back());
     }
+    rotated.min_dx = *std::min_element(rotated.dx.begin(), rotated.dx.end());
+    rotated.max_dx = *std::max_element(rotated.dx.begin(), rotated.dx.end());
+    rotated.min_dy = *std::min_element(rotated.dy.begin(), rotated.dy.end());
+    rotated.max_dy = *std::max_element(rotated.dy.begin(), rotated.dy.end());
     for (int y = 0; y < height_; y += span)
       for (int x = 0; x < width_; x += span)
         if (regionAllows(top, x, y)) {

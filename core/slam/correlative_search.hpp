@@ -17,6 +17,7 @@
 //
 //   CorrelativeMapSearch search(map_points, reference_positions, params);
 //   CorrelativeSearchResult r = search.find(points_in_robot_frame, query);
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -79,6 +80,8 @@ class CorrelativeMapSearch {
   struct RotatedPoints {
     double theta = 0.0;
     std::vector<int> dx, dy;
+    std::vector<std::ptrdiff_t> offsets;  ///< dy · width + dx: into a level's cells
+    int min_dx = 0, max_dx = 0, min_dy = 0, max_dy = 0;
   };
   int cellValue(int level, int x, int y) const;
   double nodeScore(const RotatedPoints& rotated, int level, int x, int y) const;

@@ -280,20 +280,29 @@ std::vector<Vec2> MapLocalizer::sequencePoints(const std::vector<SearchedScan>& 
   return evenlyThinned(all, options_.global_points);
 }
 
+double MapLocalizer::seeThroughLimit(const LaserScan& raw, const Pose2& current) const {
+  return std::max(options_.global_max_see_through,
+                  0.5 * field_->seeThrough(raw, current, options_.global_see_through_clearance));
+}
+
 std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& raw, const PreparedScan& scan,
-                                                              const std::vector<Vec2>& points) {
+                                                              const std::vector<Vec2>& points, const Pose2& current) {
   ++stats_.global_searches;
   const CorrelativeQuery query{options_.global_min_score, options_.global_score_margin, options_.global_ambiguity_distance,
                                params_.loop_ambiguity_heading};
   const CorrelativeSearchResult found = correlative_->find(points, query);
   stats_.global_nodes += found.scored_nodes;
   // The places the scans fit about equally well: a place whose rays would pass through mapped walls
-  // is not where the robot is (a corridor seen the wrong way round, a look-alike).
+  // is not where the robot is (a corridor seen the wrong way round, a look-alike). Where the
+  // robot is thought to be now sees through walls too, the map there is not one clean copy (a
+  // map bent by an unclosed loop holds a wall twice): a place seeing through at most half as
+  // much is no less likely on that ground.
+  const double see_through_limit = seeThroughLimit(raw, current);
   // Of the others, one that misfits (1 − score) more than global_misfit_ratio times the best does
   // is no rival (PSM SLAM's loop ambiguity rule compares error indices the same way).
   std::vector<CorrelativeHit> places;
   for (const CorrelativeHit& place : found.places) {
-    if (field_->seeThrough(raw, place.pose, options_.global_see_through_clearance) > options_.global_max_see_through)
+    if (field_->seeThrough(raw, place.pose, options_.global_see_through_clearance) > see_through_limit)
       ++stats_.global_see_through;
     else if (places.empty() || 1.0 - place.score <= options_.global_misfit_ratio * (1.0 - places.front().score))
       places.push_back(place);
@@ -326,11 +335,23 @@ bool MapLocalizer::doubt(const LaserScan& scan, const Pose2& tracked) {
   last_doubt_at_ = tracked;
   ++stats_.doubt_searches;
   const std::vector<Vec2> points = sequencePoints(doubted_, tracked);
-  const std::optional<Fix> place = searchGlobally(scan, *prepared, points);
+  // The place must explain the scans markedly better than the tracked pose does, as a rival must.
+  // Most doubts end with a cheap first search, which prunes far more: no pose explains the scans
+  // that much better, or the best one is where the robot is tracked (odometry bends the scans).
+  const double tracked_score = correlative_->score(points, tracked);
+  const double better_score = 1.0 - (1.0 - tracked_score) / options_.global_misfit_ratio;
+  const CorrelativeQuery best_only{std::max(options_.global_min_score, better_score), 0.0,
+                                   options_.global_ambiguity_distance, params_.loop_ambiguity_heading};
+  const CorrelativeSearchResult best = correlative_->find(points, best_only);
+  stats_.global_nodes += best.scored_nodes;
+  if (best.places.empty()) return false;
+  const Pose2 best_pose = best.places.front().pose;
+  if (isNear(best_pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading) &&
+      field_->seeThrough(scan, best_pose, options_.global_see_through_clearance) <= seeThroughLimit(scan, tracked))
+    return false;
+  const std::optional<Fix> place = searchGlobally(scan, *prepared, points, tracked);
   if (!place || isNear(place->pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading))
     return false;
-  // The place must explain the scans markedly better than the tracked pose does, as a rival must.
-  const double tracked_score = correlative_->score(points, tracked);
   if (1.0 - tracked_score <= options_.global_misfit_ratio * (1.0 - place->score)) return false;
   ++stats_.doubts;
   return true;
@@ -366,7 +387,7 @@ bool MapLocalizer::searchDue(const Pose2& predicted) const {
 void MapLocalizer::searchAndConfirm(const LaserScan& raw, const PreparedScan& scan, const Pose2& predicted,
                                     MapLocalizationResult& result) {
   last_search_at_ = predicted;
-  const std::optional<Fix> hit = searchGlobally(raw, scan, sequencePoints(searched_, predicted));
+  const std::optional<Fix> hit = searchGlobally(raw, scan, sequencePoints(searched_, predicted), predicted);
   if (!hit) {
     hypothesis_.reset();
     return;

@@ -180,8 +180,13 @@ class MapLocalizer {
   /// motion kept up (a good match just outside the gate is then taken, not rejected).
   bool odometryFaultExplains(const Pose2& measured) const;
   bool withinGate(const Vec3& innovation, const Mat3& innovation_cov) const;
-  /// Global search: the unambiguous best hit of `points` (robot frame, `raw` the current scan), if any.
-  std::optional<Fix> searchGlobally(const LaserScan& raw, const PreparedScan& scan, const std::vector<Vec2>& points);
+  /// Global search: the unambiguous best hit of `points` (robot frame, `raw` the current scan), if
+  /// any; `current` is where the robot is thought to be now (tracked, or dead reckoning).
+  std::optional<Fix> searchGlobally(const LaserScan& raw, const PreparedScan& scan, const std::vector<Vec2>& points,
+                                    const Pose2& current);
+  /// The fraction of `raw`'s rays a place may send through mapped walls: global_max_see_through, or
+  /// half of what `current` sends through if more.
+  double seeThroughLimit(const LaserScan& raw, const Pose2& current) const;
   /// The points of `scans` in `pose`'s robot frame: at most global_points of them.
   std::vector<Vec2> sequencePoints(const std::vector<SearchedScan>& scans, const Pose2& pose) const;
   /// Adds `latest` to `scans` and drops those beyond global_sequence_distance of it, or more than

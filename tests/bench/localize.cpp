@@ -173,10 +173,11 @@ int main(int argc, char** argv) {
     std::printf("fix at scan %zu: %.2f m, %.1f deg from the known start's tracked pose\n", k, miss.translation().norm(),
                 rad2deg(miss.theta));
   }
-  if (std::getenv("POLARSLAM_BENCH_WORST")) {  // the worst relations across the split, known start
+  if (const char* worst = std::getenv("POLARSLAM_BENCH_WORST")) {  // the N worst relations across the split, known start
+    const size_t count = static_cast<size_t>(std::max(1, std::atoi(worst)));
     RelationMetric m = evaluateRelations(known.joined, across_split);
     std::sort(m.errors.begin(), m.errors.end(), [](const RelationError& a, const RelationError& b) { return a.translation > b.translation; });
-    for (size_t i = 0; i < std::min<size_t>(12, m.errors.size()); ++i) {
+    for (size_t i = 0; i < std::min(count, m.errors.size()); ++i) {
       const Relation& r = across_split[m.errors[i].relation_index];
       std::printf("  across: %7.1f s -> %7.1f s from the split: %.3f m off (relation %.2f m)\n", 1e-6 * double(r.t1 - split),
                   1e-6 * double(r.t2 - split), m.errors[i].translation, r.motion().translation().norm());
@@ -202,6 +203,7 @@ int main(int argc, char** argv) {
   if (continue_mapping) {
     std::printf("figures: %s\nPSM SLAM: %s\n", result.report["localization"].dump().c_str(),
                 result.report["psm_slam"].dump().c_str());
+    std::printf("known start, PSM SLAM: %s\n", known.report["psm_slam"].dump().c_str());
     return 0;
   }
   std::printf("counts: %zu matched, %zu odometry-only, %zu on new ground, %zu match failures, "
