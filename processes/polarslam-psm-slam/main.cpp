@@ -91,7 +91,9 @@ std::string exitSummary(const nlohmann::json& report) {
   std::string line;
   if (report.contains("localization")) {
     const nlohmann::json& l = report["localization"];
-    line = "localisation: " + count(l, "fixes") + " fixes, " + count(l, "losses") + " losses; ";
+    line = "localisation: " + count(l, "fixes") + " fixes, " + count(l, "losses") + " losses";
+    if (l.value("first_fix_scan", int64_t{-1}) >= 0) line += ", first fix at scan " + count(l, "first_fix_scan");
+    line += "; ";
   }
   if (report.contains("psm_slam")) {
     const nlohmann::json& p = report["psm_slam"];

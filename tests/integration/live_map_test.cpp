@@ -173,6 +173,37 @@ TEST(LiveMap, SavesLocalisesAndContinuesLiveAsOffline) {
   if (!::testing::Test::HasFailure()) fs::remove_all(dir);
 }
 
+/// The scan of the first fix that a live polarslam-psm-slam reported on exit (-1: none).
+long liveFirstFix(const std::string& output) {
+  const std::string marker = "first fix at scan ";
+  const size_t at = output.find(marker);
+  return at == std::string::npos ? -1 : std::stol(output.substr(at + marker.size()));
+}
+
+// Global localisation live (issue 15, item 3): localising without --initial-pose, the process
+// finds where it starts in the map by the global search, as `polarslam run` does offline with the
+// same map, log and configuration: the same first fix, the same trajectory.
+TEST(LiveMap, FindsAnUnknownStartLiveAsOffline) {
+  const fs::path dir = freshDir("live-unknown-start");
+  const std::string map = (dir / "map").string();
+  runOffline(dir, "mapping", {"--save-map", map});
+  const std::vector<std::string> localize{"--load-map", map, "--mode", "localize"};
+  const nlohmann::json offline = runOffline(dir, "localize", localize);
+  const nlohmann::json live = runLive(dir, "localize", localize);
+  const long offline_fix = offline["localization"].value("first_fix_scan", -1L);
+  const long live_fix = liveFirstFix(readFile(dir / "slam-localize.out"));
+  std::printf("unknown start            offline  live\n");
+  std::printf("first fix at scan        %7ld  %4ld\n", offline_fix, live_fix);
+  std::printf("ATE RMSE, final [m]      %7.4f  %.4f\n", figure(offline, "ate_rmse_m"), figure(live, "ate_rmse_m"));
+  std::printf("ATE RMSE, online [m]     %7.4f  %.4f\n", figure(offline, "online_ate_rmse_m"), figure(live, "online_ate_rmse_m"));
+  ASSERT_GE(offline_fix, 0) << "offline, the start was never found: " << offline["localization"].dump();
+  EXPECT_LT(offline_fix, 100) << offline["localization"].dump();
+  EXPECT_NEAR(live_fix, offline_fix, 2) << readFile(dir / "slam-localize.out");
+  EXPECT_NEAR(figure(live, "ate_rmse_m"), figure(offline, "ate_rmse_m"), 0.10 * figure(offline, "ate_rmse_m"));
+  EXPECT_NEAR(figure(live, "online_ate_rmse_m"), figure(offline, "online_ate_rmse_m"),
+              0.10 * figure(offline, "online_ate_rmse_m"));
+  if (!::testing::Test::HasFailure()) fs::remove_all(dir);
+}
 
 /// A live run with --journal and a snapshot every 10 s of stream time, killed with SIGKILL after
 /// about 80 s of the log and restarted; the recorded PSM_SLAM_POSE scored.
