@@ -335,10 +335,12 @@ bool MapLocalizer::doubt(const LaserScan& scan, const Pose2& tracked) {
   last_doubt_at_ = tracked;
   ++stats_.doubt_searches;
   const std::vector<Vec2> points = sequencePoints(doubted_, tracked);
-  // The place must explain the scans markedly better than the tracked pose does, as a rival must.
+  // The place must explain the scans markedly better than the tracked pose does, as a rival must;
+  // the best pose within the refinement window around it stands for it (a tracked pose a few
+  // centimetres off, or scans bent a little by odometry, are no evidence of being elsewhere).
   // Most doubts end with a cheap first search, which prunes far more: no pose explains the scans
-  // that much better, or the best one is where the robot is tracked (odometry bends the scans).
-  const double tracked_score = correlative_->score(points, tracked);
+  // that much better, or the best one is where the robot is tracked.
+  const double tracked_score = correlative_->refine(points, tracked, kRefineTranslation, kRefineRotation).score;
   const double better_score = 1.0 - (1.0 - tracked_score) / options_.global_misfit_ratio;
   const CorrelativeQuery best_only{std::max(options_.global_min_score, better_score), 0.0,
                                    options_.global_ambiguity_distance, params_.loop_ambiguity_heading};
