@@ -42,6 +42,8 @@ void describePsmSlamEstimatorConfig(ParameterTable& table, PsmSlamEstimatorConfi
   sonar.angle("repeat_angle_deg", c.sonar.fill.repeat_angle, 0.0, 180.0, "... and turned at most this much");
   sonar.number("laser_seen_fraction", c.sonar.fill.laser_seen_fraction, 0.0, 1.0,
                "a wall the laser sees along more of its beams is no glass: not filled");
+  sonar.number("max_return_fraction", c.sonar.fill.max_return_fraction, 0.0, 1.0,
+               "only a scan with laser returns on fewer of its beams is filled");
 }
 
 PsmSlamEstimatorConfig loadPsmSlamEstimatorConfig(const std::string& yaml_path) {
@@ -91,7 +93,8 @@ void PsmSlamEstimator::onLaser(const LaserScan& laser) {
     const Pose2 motion = between(seen.odometry, odometry_pose_);  // robot now, in the robot frame of the sonar scan
     for (const SonarPlane& p : seen.repeated) planes.push_back(movedPlane(p, motion));
   }
-  if (!planes.empty()) sonar_filled_readings_ += fillFromSonarPlanes(scan, planes, config_.sonar.fill);
+  if (!planes.empty() && laserSeesLittle(scan, config_.slam.psm.max_range, config_.sonar.fill))
+    sonar_filled_readings_ += fillFromSonarPlanes(scan, planes, config_.sonar.fill);
   const auto start = std::chrono::steady_clock::now();
   last_result_ = slam_.addScan(scan);
   slam_seconds_ += secondsSince(start);

@@ -55,6 +55,13 @@ double rangeToPlane(const LaserScan& scan, size_t i, const SonarPlane& plane, do
 
 }  // namespace
 
+bool laserSeesLittle(const LaserScan& scan, double max_range, const SonarPlaneFillOptions& options) {
+  size_t returns = 0;
+  for (size_t i = 0; i < scan.size(); ++i)
+    if (scan.valid(i) && scan.ranges[i] <= max_range) ++returns;
+  return static_cast<double>(returns) < options.max_return_fraction * static_cast<double>(scan.size());
+}
+
 size_t fillFromSonarPlanes(LaserScan& scan, const std::vector<SonarPlane>& planes, const SonarPlaneFillOptions& options) {
   size_t filled = 0;
   for (const SonarPlane& plane : planes) {

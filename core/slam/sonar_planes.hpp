@@ -30,6 +30,11 @@ struct SonarPlaneFillOptions {
   /// A plane the laser itself sees along more than this fraction of the beams that meet it is
   /// no glass, and is not filled.
   double laser_seen_fraction = 0.2;
+  /// Only a scan whose laser returns (within the matcher's range) on fewer than this fraction of
+  /// its beams is filled: where the laser sees enough, its own view stays as it is (sonar sees a
+  /// glass wall from some places and not from others, and reference scans that differ so match
+  /// worse; a corridor of glass leaves the laser next to nothing).
+  double max_return_fraction = 0.5;
 };
 
 /// The plane targets of one sonar scan (other kinds and unusable targets are skipped).
@@ -39,6 +44,8 @@ SonarPlane movedPlane(const SonarPlane& plane, const Pose2& motion);
 /// The planes of `now` that one of `before` (already moved into the same frame) repeats.
 std::vector<SonarPlane> repeatedPlanes(const std::vector<SonarPlane>& now, const std::vector<SonarPlane>& before,
                                        const SonarPlaneFillOptions& options);
+/// Whether fewer than options.max_return_fraction of the scan's beams return within `max_range`.
+bool laserSeesLittle(const LaserScan& scan, double max_range, const SonarPlaneFillOptions& options);
 /// Fills the scan's beams that meet a plane (see above); returns how many readings changed.
 size_t fillFromSonarPlanes(LaserScan& scan, const std::vector<SonarPlane>& planes, const SonarPlaneFillOptions& options);
 
