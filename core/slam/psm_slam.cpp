@@ -497,10 +497,10 @@ bool PsmSlam::applyLoopClosure(const Candidate& c, const Observation& o, const P
       return false;
     }
     // Without a neighbour's say the closure rests on the robot being near this reference scan
-    // at all. When the prior is wider than the disc a loop search examines around it, the robot
-    // may well be somewhere else that merely looks alike, which no search has looked at.
+    // at all. When the prior is wide (loop_unverified_max_extent, within the disc a loop search
+    // examines), the robot may well be somewhere else that merely looks alike.
     if (verification == Verification::NoEvidence &&
-        params_.loop_candidate_sigmas * largestPositionSigma(c.prediction) > 2.0 * params_.loop_search_radius) {
+        params_.loop_candidate_sigmas * largestPositionSigma(c.prediction) > params_.loop_unverified_max_extent) {
       ++stats_.loop_unverified;
       return false;
     }
