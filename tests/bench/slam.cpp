@@ -26,6 +26,7 @@
 #include <random>
 #include <sstream>
 
+#include "estimator_sim_sink.hpp"
 #include "eval/ate.hpp"
 #include "eval/nees.hpp"
 #include "eval/trajectory_lookup.hpp"
@@ -273,19 +274,6 @@ void runClaim(const Options& o, const std::string& world_path) {
 
 // ---- PSM SLAM alone -----------------------------------------------------------------------------
 
-class PsmOnlySink : public SimSink {
- public:
-  explicit PsmOnlySink(PsmSlamEstimator& estimator) : estimator_(estimator) {}
-  void onLaser(const LaserScan& scan) override { estimator_.onLaser(scan); }
-  void onSonar(const SonarScan& scan) override { estimator_.onSonar(scan); }
-  void onOdometry(const OdometryReading& odometry) override { estimator_.onOdometry(odometry); }
-  void onGroundTruth(const PoseStamped& pose) override { truth.push_back(pose); }
-  std::vector<PoseStamped> truth;
-
- private:
-  PsmSlamEstimator& estimator_;
-};
-
 /// A loop edge whose measurement is this far from the true relative pose of its nodes, and
 /// farther than its covariance allows (χ²₃(0.999)), is wrong: along a corridor a match may be
 /// off by more and say so in its covariance.
@@ -337,7 +325,7 @@ void runPsmOnly(const Options& o, const std::string& world_path) {
   for (int k = 0; k < o.seeds; ++k) {
     const uint64_t seed = o.first_seed + static_cast<uint64_t>(k);
     PsmSlamEstimator estimator(config);
-    PsmOnlySink sink(estimator);
+    testing::EstimatorSimSink sink(estimator);
     Simulator sim(world, robot, seed);
     const double limit = o.seconds > 0 ? o.seconds : 3600.0;
     while (sim.time() < limit && !sim.finished()) sim.step(sink);

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "estimator_sim_sink.hpp"
 #include "eval/trajectory_lookup.hpp"
 #include "pipeline/psm_slam_estimator.hpp"
 #include "robot/robot_description.hpp"
@@ -59,19 +60,6 @@ TEST(PsmSlamWrongClosure, LookAlikeCorridorIsNotTakenForTheStart) {
   }
 }
 
-class EstimatorSink : public SimSink {
- public:
-  explicit EstimatorSink(PsmSlamEstimator& estimator) : estimator_(estimator) {}
-  void onLaser(const LaserScan& scan) override { estimator_.onLaser(scan); }
-  void onSonar(const SonarScan& scan) override { estimator_.onSonar(scan); }
-  void onOdometry(const OdometryReading& odometry) override { estimator_.onOdometry(odometry); }
-  void onGroundTruth(const PoseStamped& pose) override { truth.push_back(pose); }
-  std::vector<PoseStamped> truth;
-
- private:
-  PsmSlamEstimator& estimator_;
-};
-
 // Seeds (of 5000–5099, never used for tuning) on which the laser alone, blind in the glass
 // corridor, let the look-alike closure through and the runs ended 5 m off. With the default
 // configuration the sonar's planes fill the scans the laser sees little in (sonar.fill_planes).
@@ -82,7 +70,7 @@ TEST(PsmSlamWrongClosure, SonarPlanesCarryTheLaserThroughTheGlassCorridor) {
   const RobotDescription robot = loadRobotDescription(std::string(POLARSLAM_SOURCE_DIR) + "/config/robots/default.yaml");
   for (const uint64_t seed : {5010u, 5039u, 5061u, 5051u}) {
     PsmSlamEstimator estimator(PsmSlamEstimatorConfig{});
-    EstimatorSink sink(estimator);
+    testing::EstimatorSimSink sink(estimator);
     Simulator sim(world, robot, seed);
     while (!sim.finished() && sim.time() < 600.0) sim.step(sink);
     nlohmann::json report;
