@@ -68,7 +68,7 @@ struct MapLocalizationParams {
   double global_ambiguity_distance = 0.5;  ///< m
   /// While tracked: a scan near the map's reference scans with less than this fraction of its
   /// readings within global_fit_distance of the map starts a doubt (MapLocalizer::doubt).
-  double doubt_max_fit = 0.9;
+  double doubt_max_fit = 0.95;
   /// The hit of the next search must agree with the previous one after the odometry in between.
   double confirm_translation = 0.15;     ///< m
   double confirm_rotation = deg2rad(5.0);

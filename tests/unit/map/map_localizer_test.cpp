@@ -253,8 +253,8 @@ TEST(MapLocalization, AKnownStartTracksOverTheFixedMap) {
 // The kidnap of MapLocalizer.AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace with temporary
 // mapping (the default): scans near the map without a match with it lose the robot, the global
 // search finds it again, and every pose from a fix on is where the robot is. How soon is printed
-// (issue 15's goal: found again within 20 scans on every seed; met on 19 of 20, the other is
-// noticed late: along a look-alike stretch the tracked pose keeps fitting 90% of the scan).
+// (issue 15's goal: found again within 20 scans on every seed; with doubt_max_fit 0.9 one seed
+// was noticed late, its tracked pose along a look-alike stretch fitting 90-94 % of the scan).
 TEST(MapLocalization, AKidnappedRobotIsNoticedAndFoundAgainWhereItIs) {
   const StoredMap map = storedMapOfOneLap();
   KidnapTally tally;
@@ -282,7 +282,7 @@ TEST(MapLocalization, AKidnappedRobotIsNoticedAndFoundAgainWhereItIs) {
     tally.add(kidnapping, *noticed, found_again);
   }
   tally.print("temporary mapping");
-  EXPECT_GE(tally.foundWithin20(), 19u) << "fewer kidnaps recovered within 20 scans than the doubt search gave";
+  EXPECT_EQ(tally.foundWithin20(), 20u) << "issue 15: every kidnap recovered within 20 scans";
 }
 
 TEST(MapContinuation, AKnownStartMapsOnInTheMapsFrameAndClosesLoopsWithIt) {
