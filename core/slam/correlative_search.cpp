@@ -33,6 +33,35 @@ std::vector<uint8_t> poolMax(const std::vector<uint8_t>& finer, int width, int h
   return coarser;
 }
 
+/// Items by an integer key in [0, max_key], highest first: a bucket per key, so that adding one and
+/// taking the best cost O(1) (a heap of the millions of nodes a search holds spends its time in
+/// cache misses). Items of equal key come out last in, first out.
+template <typename T>
+class BucketQueue {
+ public:
+  explicit BucketQueue(int max_key) : buckets_(static_cast<size_t>(max_key) + 1) {}
+  void push(int key, const T& item) {
+    buckets_[static_cast<size_t>(key)].push_back(item);
+    top_ = std::max(top_, key);
+  }
+  /// The highest key held, or -1 when empty.
+  int topKey() {
+    while (top_ >= 0 && buckets_[static_cast<size_t>(top_)].empty()) --top_;
+    return top_;
+  }
+  /// An item of the highest key; only when not empty.
+  T pop() {
+    std::vector<T>& bucket = buckets_[static_cast<size_t>(topKey())];
+    const T item = bucket.back();
+    bucket.pop_back();
+    return item;
+  }
+
+ private:
+  std::vector<std::vector<T>> buckets_;
+  int top_ = -1;
+};
+
 }  // namespace
 
 CorrelativeMapSearch::CorrelativeMapSearch(const std::vector<Vec2>& map_points,
@@ -91,9 +120,10 @@ CorrelativeMapSearch::CorrelativeMapSearch(const std::vector<Vec2>& map_points,
     stamp(region, p + Vec2(0.5 * res, 0.5 * res), params_.region_radius, inside);
   levels_.push_back(std::move(score));
   region_.push_back(std::move(region));
-  for (int k = 1; k < params_.levels; ++k) {
+  // One score level more than nodes have: a node's headings widen the window its bound needs.
+  for (int k = 1; k <= params_.levels; ++k) {
     levels_.push_back(poolMax(levels_.back(), width_, height_, 1 << (k - 1)));
-    region_.push_back(poolMax(region_.back(), width_, height_, 1 << (k - 1)));
+    if (k < params_.levels) region_.push_back(poolMax(region_.back(), width_, height_, 1 << (k - 1)));
   }
 }
 
@@ -112,17 +142,22 @@ bool CorrelativeMapSearch::regionAllows(int level, int x, int y) const {
   return region_[static_cast<size_t>(level)][static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)] != 0;
 }
 
-double CorrelativeMapSearch::nodeScore(const RotatedPoints& rotated, int level, int x, int y) const {
-  if (rotated.dx.empty()) return 0.0;
+int CorrelativeMapSearch::nodeSum(const HeadingGroup& group, int level, int x, int y) const {
+  // The cells a point lands in over the node: its lowest cell plus the translations and the
+  // group's extent. The smallest window holding them all gives the bound.
+  int window_level = level;
+  while ((1 << window_level) < (1 << level) + group.extent) ++window_level;
+  if (window_level >= static_cast<int>(levels_.size())) return static_cast<int>(kScoreScale) * static_cast<int>(group.dx.size());
   int sum = 0;
-  if (x + rotated.min_dx >= 0 && y + rotated.min_dy >= 0 && x + rotated.max_dx < width_ && y + rotated.max_dy < height_) {
+  if (x + group.min_dx >= 0 && y + group.min_dy >= 0 && x + group.max_dx < width_ && y + group.max_dy < height_) {
     // Every point lands in the grid (the usual case): no clamping.
-    const uint8_t* base = &levels_[static_cast<size_t>(level)][static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
-    for (const std::ptrdiff_t offset : rotated.offsets) sum += base[offset];
+    const uint8_t* base =
+        &levels_[static_cast<size_t>(window_level)][static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
+    for (const std::ptrdiff_t offset : group.offsets) sum += base[offset];
   } else {
-    for (size_t i = 0; i < rotated.dx.size(); ++i) sum += cellValue(level, x + rotated.dx[i], y + rotated.dy[i]);
+    for (size_t i = 0; i < group.dx.size(); ++i) sum += cellValue(window_level, x + group.dx[i], y + group.dy[i]);
   }
-  return sum / (kScoreScale * static_cast<double>(rotated.dx.size()));
+  return sum;
 }
 
 // A heading step that moves a point `reach` away by at most one cell (Hess et al., (7)).
@@ -131,8 +166,59 @@ double CorrelativeMapSearch::headingStep(double reach) const {
   return std::acos(std::clamp(1.0 - res * res / (2.0 * r * r), -1.0, 1.0));
 }
 
-Pose2 CorrelativeMapSearch::poseOf(const RotatedPoints& rotated, int x, int y) const {
-  return Pose2(origin_.x() + x * params_.resolution, origin_.y() + y * params_.resolution, rotated.theta);
+Pose2 CorrelativeMapSearch::poseOf(int heading, int headings, int x, int y) const {
+  return Pose2(origin_.x() + x * params_.resolution, origin_.y() + y * params_.resolution,
+               wrapAngle(2.0 * std::numbers::pi * heading / headings));
+}
+
+std::vector<CorrelativeMapSearch::HeadingGroup> CorrelativeMapSearch::headingGroups(const std::vector<Vec2>& points,
+                                                                                    int headings) const {
+  const auto finish = [&](HeadingGroup& group) {
+    for (size_t i = 0; i < group.dx.size(); ++i)
+      group.offsets.push_back(static_cast<std::ptrdiff_t>(group.dy[i]) * width_ + group.dx[i]);
+    group.min_dx = *std::min_element(group.dx.begin(), group.dx.end());
+    group.max_dx = *std::max_element(group.dx.begin(), group.dx.end());
+    group.min_dy = *std::min_element(group.dy.begin(), group.dy.end());
+    group.max_dy = *std::max_element(group.dy.begin(), group.dy.end());
+  };
+  std::vector<HeadingGroup> groups(static_cast<size_t>(headings));
+  // Per group and point, the highest cell over the group's headings (the lowest is dx, dy).
+  std::vector<std::vector<int>> high_x(static_cast<size_t>(headings)), high_y(static_cast<size_t>(headings));
+  for (int h = 0; h < headings; ++h) {
+    HeadingGroup& group = groups[static_cast<size_t>(h)];
+    group.first = h;
+    const double theta = 2.0 * std::numbers::pi * h / headings, c = std::cos(theta), s = std::sin(theta);
+    for (const Vec2& p : points) {
+      group.dx.push_back(static_cast<int>(std::floor((c * p.x() - s * p.y()) / params_.resolution)));
+      group.dy.push_back(static_cast<int>(std::floor((s * p.x() + c * p.y()) / params_.resolution)));
+    }
+    high_x[static_cast<size_t>(h)] = group.dx;
+    high_y[static_cast<size_t>(h)] = group.dy;
+    finish(group);
+  }
+  for (size_t begin = 0, end = groups.size(); end - begin > 1; begin = end, end = groups.size()) {
+    for (size_t a = begin; a < end; a += 2) {
+      const size_t b = a + 1 < end ? a + 1 : a;  // an odd group out is its own parent's only child
+      HeadingGroup parent;
+      parent.level = groups[a].level + 1;
+      parent.first = groups[a].first;
+      parent.children[0] = static_cast<int>(a);
+      if (b != a) parent.children[1] = static_cast<int>(b);
+      std::vector<int> hx(points.size()), hy(points.size());
+      for (size_t i = 0; i < points.size(); ++i) {
+        parent.dx.push_back(std::min(groups[a].dx[i], groups[b].dx[i]));
+        parent.dy.push_back(std::min(groups[a].dy[i], groups[b].dy[i]));
+        hx[i] = std::max(high_x[a][i], high_x[b][i]);
+        hy[i] = std::max(high_y[a][i], high_y[b][i]);
+        parent.extent = std::max({parent.extent, hx[i] - parent.dx[i], hy[i] - parent.dy[i]});
+      }
+      finish(parent);
+      groups.push_back(std::move(parent));
+      high_x.push_back(std::move(hx));
+      high_y.push_back(std::move(hy));
+    }
+  }
+  return groups;
 }
 
 CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& points, const CorrelativeQuery& query) const {
@@ -148,62 +234,73 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
       reach = std::max(reach, p.norm());
     }
   if (usable.empty()) return result;
-  const double res = params_.resolution;
-  const double step = headingStep(reach);
-  const int headings = std::max(1, static_cast<int>(std::ceil(2.0 * std::numbers::pi / step)));
-  std::vector<RotatedPoints> rotations(static_cast<size_t>(headings));
+  const int headings = std::max(1, static_cast<int>(std::ceil(2.0 * std::numbers::pi / headingStep(reach))));
+  const std::vector<HeadingGroup> groups = headingGroups(usable, headings);
   const int top = params_.levels - 1, span = 1 << top;
-  // Best first over all headings (§V.B searches depth first per heading; best first scores
-  // fewer nodes when most headings are hopeless): the first leaf taken is the best pose.
-  auto lower = [](const Node& a, const Node& b) { return a.score < b.score; };
-  std::priority_queue<Node, std::vector<Node>, decltype(lower)> open(lower);
-  for (int h = 0; h < headings; ++h) {
-    RotatedPoints& rotated = rotations[static_cast<size_t>(h)];
-    rotated.theta = wrapAngle(2.0 * std::numbers::pi * h / headings);
-    const double c = std::cos(rotated.theta), s = std::sin(rotated.theta);
-    for (const Vec2& p : usable) {
-      rotated.dx.push_back(static_cast<int>(std::floor((c * p.x() - s * p.y()) / res)));
-      rotated.dy.push_back(static_cast<int>(std::floor((s * p.x() + c * p.y()) / res)));
-      rotated.offsets.push_back(static_cast<std::ptrdiff_t>(rotated.dy.back()) * width_ + rotated.dx.back());
-    }
-    rotated.min_dx = *std::min_element(rotated.dx.begin(), rotated.dx.end());
-    rotated.max_dx = *std::max_element(rotated.dx.begin(), rotated.dx.end());
-    rotated.min_dy = *std::min_element(rotated.dy.begin(), rotated.dy.end());
-    rotated.max_dy = *std::max_element(rotated.dy.begin(), rotated.dy.end());
+  // The root groups: those of the highest level whose points all move within a top node's span
+  // (groups are stored level by level; a level's extents are at least those below it).
+  size_t roots_begin = 0;
+  for (size_t begin = 0; begin < groups.size();) {
+    size_t end = begin;
+    bool fits = true;
+    for (; end < groups.size() && groups[end].level == groups[begin].level; ++end) fits = fits && groups[end].extent <= span;
+    if (!fits) break;
+    roots_begin = begin;
+    begin = end;
+  }
+  // Best first (§V.B searches depth first per heading; best first scores fewer nodes when most
+  // headings are hopeless): the first leaf taken is the best pose. A node's key is its score's sum
+  // of cell values.
+  const int points_count = static_cast<int>(usable.size());
+  const auto score_of = [&](int sum) { return sum / (kScoreScale * points_count); };
+  BucketQueue<Node> open(static_cast<int>(kScoreScale) * points_count);
+  const auto consider = [&](const Node& node, double threshold) {
+    ++result.scored_nodes;
+    if (score_of(node.sum) >= threshold) open.push(node.sum, node);
+  };
+  const int root_level = groups[roots_begin].level;
+  for (size_t g = roots_begin; g < groups.size() && groups[g].level == root_level; ++g)
     for (int y = 0; y < height_; y += span)
       for (int x = 0; x < width_; x += span)
-        if (regionAllows(top, x, y)) {
-          ++result.scored_nodes;
-          const Node root{x, y, top, h, nodeScore(rotated, top, x, y)};
-          if (root.score >= query.min_score) open.push(root);
-        }
-  }
+        if (regionAllows(top, x, y)) consider({x, y, top, static_cast<int>(g), nodeSum(groups[g], top, x, y)}, query.min_score);
+  // Leaves come out best first: the first of each place is its best pose. A node whose every pose
+  // is near a place found already can add none: it is not expanded.
+  const auto within_a_place = [&](const Node& node, const HeadingGroup& group) {
+    const double first = 2.0 * std::numbers::pi * group.first / headings;
+    const double turn = 2.0 * std::numbers::pi * (std::min(group.first + (1 << group.level), headings) - 1 - group.first) / headings;
+    const double size = ((1 << node.level) - 1) * params_.resolution;
+    const Vec2 corner = poseOf(group.first, headings, node.x, node.y).translation();
+    return std::any_of(result.places.begin(), result.places.end(), [&](const CorrelativeHit& place) {
+      const double from = wrapAngle(first - place.pose.theta);
+      if (from < -query.rival_heading || from + turn > query.rival_heading) return false;
+      for (const Vec2& offset : {Vec2(0.0, 0.0), Vec2(size, 0.0), Vec2(0.0, size), Vec2(size, size)})
+        if ((corner + offset - place.pose.translation()).norm() > query.rival_distance) return false;
+      return true;
+    });
+  };
   double threshold = query.min_score;
-  std::vector<CorrelativeHit> hits;
-  while (!open.empty() && open.top().score >= threshold) {
-    const Node node = open.top();
-    open.pop();
-    const RotatedPoints& rotated = rotations[static_cast<size_t>(node.heading)];
-    if (node.level == 0) {
-      hits.push_back({poseOf(rotated, node.x, node.y), node.score});
-      threshold = std::max(threshold, hits.front().score - query.rival_margin);
+  while (open.topKey() >= 0 && score_of(open.topKey()) >= threshold) {
+    const Node node = open.pop();
+    const HeadingGroup& group = groups[static_cast<size_t>(node.group)];
+    if (within_a_place(node, group)) continue;
+    if (node.level == 0 && group.level == 0) {
+      result.places.push_back({poseOf(group.first, headings, node.x, node.y), score_of(node.sum)});
+      threshold = std::max(threshold, result.places.front().score - query.rival_margin);
+      continue;
+    }
+    // Branch on what loosens the bound more: the headings' spread or the translations'.
+    if (group.level > 0 && (node.level == 0 || group.extent > (1 << node.level))) {
+      for (const int child : group.children)
+        if (child >= 0)
+          consider({node.x, node.y, node.level, child, nodeSum(groups[static_cast<size_t>(child)], node.level, node.x, node.y)},
+                   threshold);
       continue;
     }
     const int level = node.level - 1, half = 1 << level;
     for (const auto& [ox, oy] : {std::pair{0, 0}, {half, 0}, {0, half}, {half, half}}) {
       const int x = node.x + ox, y = node.y + oy;
-      if (!regionAllows(level, x, y)) continue;
-      ++result.scored_nodes;
-      const Node child{x, y, level, node.heading, nodeScore(rotated, level, x, y)};
-      if (child.score >= threshold) open.push(child);
+      if (regionAllows(level, x, y)) consider({x, y, level, node.group, nodeSum(group, level, x, y)}, threshold);
     }
-  }
-  // Leaves come out best first: the first of each place is its best pose.
-  for (const CorrelativeHit& hit : hits) {
-    const bool new_place = std::none_of(result.places.begin(), result.places.end(), [&](const CorrelativeHit& place) {
-      return isNear(place.pose, hit.pose, query.rival_distance, query.rival_heading);
-    });
-    if (new_place) result.places.push_back(hit);
   }
   return result;
 }

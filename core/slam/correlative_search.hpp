@@ -10,6 +10,10 @@
 // Level k of the precomputed grids holds, per cell, the maximum of the score grid over the
 // 2^k × 2^k cells from there on, so the score of a level-k node (2^k × 2^k translations at one
 // heading) bounds the score of every translation in it: nodes below the best so far are pruned.
+// Headings are branched on too (as translations are): a node also spans a group of headings, over
+// which each point's cell moves within a few cells (the group's extent); the grid of the level whose
+// window holds the translations and that motion bounds the group's scores. Far from the map's
+// look-alikes most of the search space is pruned while whole groups of headings are still one node.
 //
 // The search returns the best pose of each place that scores within `rival_margin` of the best
 // (places farther than `rival_distance` or `rival_heading` apart), best first, so that the caller
@@ -72,22 +76,32 @@ class CorrelativeMapSearch {
  private:
   struct Node {
     int x = 0, y = 0;     ///< translation cell of the node's corner
-    int level = 0;
-    int heading = 0;      ///< index into the rotated point sets
-    double score = 0.0;
+    int level = 0;        ///< the node spans 2^level × 2^level translations
+    int group = 0;        ///< index into the heading groups: the headings it spans
+    int sum = 0;          ///< of the cell values its bound adds up
   };
-  /// A heading's points as cell offsets from the robot's cell.
-  struct RotatedPoints {
-    double theta = 0.0;
+  /// Headings [first, first + 2^level) of the search, and where each point lands over them: as
+  /// cell offsets from the robot's cell, the lowest of each coordinate, and how far (extent) a
+  /// point's cell moves beyond that as the heading varies over the group.
+  struct HeadingGroup {
+    int level = 0;
+    int first = 0;
+    int extent = 0;
     std::vector<int> dx, dy;
     std::vector<std::ptrdiff_t> offsets;  ///< dy · width + dx: into a level's cells
     int min_dx = 0, max_dx = 0, min_dy = 0, max_dy = 0;
+    int children[2] = {-1, -1};
   };
+  /// Heading groups of every level for `points`: single headings first (group h is heading h),
+  /// each level pairing the one below, up to one group of all; `headings` is the count.
+  std::vector<HeadingGroup> headingGroups(const std::vector<Vec2>& points, int headings) const;
   int cellValue(int level, int x, int y) const;
-  double nodeScore(const RotatedPoints& rotated, int level, int x, int y) const;
+  /// Upper bound of the score of every pose in the node (the exact score of a single pose), as the
+  /// sum of the cell values (at most kScoreScale per point).
+  int nodeSum(const HeadingGroup& group, int level, int x, int y) const;
   bool regionAllows(int level, int x, int y) const;
   double headingStep(double reach) const;
-  Pose2 poseOf(const RotatedPoints& rotated, int x, int y) const;
+  Pose2 poseOf(int heading, int headings, int x, int y) const;
 
   CorrelativeSearchParams params_;
   Vec2 origin_ = Vec2::Zero();

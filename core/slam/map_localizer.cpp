@@ -286,9 +286,11 @@ double MapLocalizer::seeThroughLimit(const LaserScan& raw, const Pose2& current)
 }
 
 std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& raw, const PreparedScan& scan,
-                                                              const std::vector<Vec2>& points, const Pose2& current) {
+                                                              const std::vector<Vec2>& points, const Pose2& current,
+                                                              double best_score) {
   ++stats_.global_searches;
-  const CorrelativeQuery query{options_.global_min_score, options_.global_score_margin, options_.global_ambiguity_distance,
+  const CorrelativeQuery query{std::max(options_.global_min_score, best_score - options_.global_score_margin),
+                               options_.global_score_margin, options_.global_ambiguity_distance,
                                params_.loop_ambiguity_heading};
   const CorrelativeSearchResult found = correlative_->find(points, query);
   stats_.global_nodes += found.scored_nodes;
@@ -351,7 +353,7 @@ bool MapLocalizer::doubt(const LaserScan& scan, const Pose2& tracked) {
   if (isNear(best_pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading) &&
       field_->seeThrough(scan, best_pose, options_.global_see_through_clearance) <= seeThroughLimit(scan, tracked))
     return false;
-  const std::optional<Fix> place = searchGlobally(scan, *prepared, points, tracked);
+  const std::optional<Fix> place = searchGlobally(scan, *prepared, points, tracked, best.places.front().score);
   if (!place || isNear(place->pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading))
     return false;
   if (1.0 - tracked_score <= options_.global_misfit_ratio * (1.0 - place->score)) return false;

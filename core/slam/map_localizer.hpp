@@ -181,9 +181,10 @@ class MapLocalizer {
   bool odometryFaultExplains(const Pose2& measured) const;
   bool withinGate(const Vec3& innovation, const Mat3& innovation_cov) const;
   /// Global search: the unambiguous best hit of `points` (robot frame, `raw` the current scan), if
-  /// any; `current` is where the robot is thought to be now (tracked, or dead reckoning).
+  /// any; `current` is where the robot is thought to be now (tracked, or dead reckoning). A known
+  /// `best_score` of the points (a search done already) spares scoring what cannot rival it.
   std::optional<Fix> searchGlobally(const LaserScan& raw, const PreparedScan& scan, const std::vector<Vec2>& points,
-                                    const Pose2& current);
+                                    const Pose2& current, double best_score = 0.0);
   /// The fraction of `raw`'s rays a place may send through mapped walls: global_max_see_through, or
   /// half of what `current` sends through if more.
   double seeThroughLimit(const LaserScan& raw, const Pose2& current) const;

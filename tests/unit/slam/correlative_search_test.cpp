@@ -121,6 +121,46 @@ TEST(CorrelativeMapSearch, ASymmetricMapGivesEveryLookAlikePlace) {
   EXPECT_EQ(found.places.size(), 4u);
 }
 
+TEST(CorrelativeMapSearch, ReportsEveryPlaceWithinTheMarginAsScoringEveryPoseDoes) {
+  // A rectangular room with a door gap: look-alike poses at several headings score near the best.
+  const std::vector<Vec2> map =
+      pointsOf({{{0, 0}, {5, 0}}, {{5, 0}, {5, 3}}, {{5, 3}, {0, 3}}, {{0, 3}, {0, 1.8}}, {{0, 1.2}, {0, 0}}}, 0.05);
+  const std::vector<Vec2> positions{{2.5, 1.5}};
+  const CorrelativeSearchParams params{0.1, 0.1, 0.8, 4};
+  const CorrelativeMapSearch search(map, positions, params);
+  const Pose2 truth(2.4, 1.6, 0.2);
+  std::vector<Vec2> points;
+  for (size_t i = 0; i < map.size(); i += 4) points.push_back(truth.inverseTransform(map[i]));
+  const CorrelativeQuery query{0.3, 0.15, 0.4, 0.4};
+  const CorrelativeSearchResult found = search.find(points, query);
+  ASSERT_FALSE(found.places.empty());
+  const double floor = found.places.front().score - query.rival_margin;
+
+  double reach = 0.0;
+  for (const Vec2& p : points) reach = std::max(reach, p.norm());
+  const int headings = static_cast<int>(std::ceil(2.0 * std::numbers::pi / std::acos(1.0 - 0.01 / (2.0 * reach * reach))));
+  size_t within_margin = 0;
+  for (int h = 0; h < headings; ++h)
+    for (int j = 0; j < 80; ++j)
+      for (int i = 0; i < 80; ++i) {
+        const Pose2 pose(search.origin().x() + 0.1 * i, search.origin().y() + 0.1 * j, wrapAngle(2.0 * std::numbers::pi * h / headings));
+        if ((pose.translation() - positions.front()).norm() > 0.79) continue;
+        const double score = search.score(points, pose);
+        ASSERT_LE(score, found.places.front().score + 1e-12) << "a pose beats the search's best";
+        if (score < floor) continue;
+        ++within_margin;
+        EXPECT_TRUE(std::any_of(found.places.begin(), found.places.end(), [&](const CorrelativeHit& place) {
+          return isNear(place.pose, pose, query.rival_distance, query.rival_heading);
+        })) << "no place reported near " << pose.x << " " << pose.y << " " << pose.theta << " scoring " << score;
+      }
+  EXPECT_GT(within_margin, found.places.size()) << "the margin should hold more poses than places";
+  EXPECT_GE(found.places.size(), 2u) << "the room's mirror image is a look-alike";
+  for (size_t a = 0; a < found.places.size(); ++a) {
+    EXPECT_GE(found.places[a].score, floor);
+    for (size_t b = 0; b < a; ++b) EXPECT_FALSE(isNear(found.places[a].pose, found.places[b].pose, query.rival_distance, query.rival_heading));
+  }
+}
+
 TEST(CorrelativeMapSearch, NothingToSearchFindsNothing) {
   const CorrelativeMapSearch empty_map({}, {{0.0, 0.0}}, CorrelativeSearchParams{});
   EXPECT_TRUE(empty_map.find({{1.0, 0.0}}, CorrelativeQuery{}).places.empty());
