@@ -182,6 +182,19 @@ int main(int argc, char** argv) {
       std::printf("  across: %7.1f s -> %7.1f s from the split: %.3f m off (relation %.2f m)\n", 1e-6 * double(r.t1 - split),
                   1e-6 * double(r.t2 - split), m.errors[i].translation, r.motion().translation().norm());
     }
+    // And within the mapped first half: where its map bends away from full-run SLAM.
+    RelationMetric mapped = evaluateRelations(known.mapped, first_half);
+    const RelationMetric full_first = evaluateRelations(full_run.trajectory(), first_half);
+    std::sort(mapped.errors.begin(), mapped.errors.end(), [](const RelationError& a, const RelationError& b) { return a.translation > b.translation; });
+    for (size_t i = 0; i < std::min(count, mapped.errors.size()); ++i) {
+      const size_t k = mapped.errors[i].relation_index;
+      const Relation& r = first_half[k];
+      const auto full_error = std::find_if(full_first.errors.begin(), full_first.errors.end(),
+                                           [&](const RelationError& e) { return e.relation_index == k; });
+      std::printf("  first half: %7.1f s -> %7.1f s before the split: %.3f m off (full run %.3f m; relation %.2f m)\n",
+                  1e-6 * double(split - r.t1), 1e-6 * double(split - r.t2), mapped.errors[i].translation,
+                  full_error != full_first.errors.end() ? full_error->translation : -1.0, r.motion().translation().norm());
+    }
   }
   std::printf("%-44s %10.4f %10.2f  (goal <= 1.25)\n", "known start: relation error, joined [m] | ratio", known_joined,
               known_joined / full.translation.mean);

@@ -466,7 +466,7 @@ void mitExperiments(const Options& o) {
   // b) success rates on real consecutive pairs
   std::printf("   b) success (≤ 5 cm, ≤ 1°) on real consecutive pairs from perturbed guesses; reference pose = PSM from the "
               "odometry guess where ICP+i agrees (≤ 2 cm, ≤ 0.5°)\n");
-  std::printf("      goals: ≥ 99 %% up to 0.3 m / 20°, ≥ 95 %% up to 0.5 m / 30°\n");
+  std::printf("      goals: ≥ 99 %% up to 0.3 m / 20°, ≥ 97 %% up to 0.5 m / 30°\n");
   {
     PsmParams p181;
     p181.decimation = 2;
@@ -490,25 +490,41 @@ void mitExperiments(const Options& o) {
       pairs.push_back({std::move(a), std::move(b), psm.pose});
     }
     Noise noise(o.seed + 50);
-    std::printf("      %-13s %16s %16s   (%zu pairs × 5 guesses)\n", "method", "0.3 m / 20°", "0.5 m / 30°", pairs.size());
+    // A failure within 5 cm / 1° across a corridor the reference scan shows lies along its free
+    // axis: there the reference pose itself is the odometry's (PSM and ICP+i both keep the guess
+    // along an axis no reading constrains), so such a failure says nothing of the matcher.
+    auto alongFreeAxis = [](const MatchResult& m, const RealPair& p) {
+      if (!m.ok() || !p.ref.corridor.is_corridor) return false;
+      const double a = p.ref.corridor.angle;
+      const Vec2 error = m.pose.translation() - p.truth.translation();
+      const double across = std::abs(-std::sin(a) * error.x() + std::cos(a) * error.y());
+      return across <= 0.05 && fixtures::poseError(m.pose, p.truth).rotation <= deg2rad(1.0);
+    };
+    std::printf("      %-13s %16s %16s   (%zu pairs × 5 guesses; in brackets, failures along a corridor's free axis)\n",
+                "method", "0.3 m / 20°", "0.5 m / 30°", pairs.size());
     for (Method m : methods()) {
       m.params.decimation = 2;
       ScanMatcher mm(m.params);
-      double rates[2];
+      double rates[2], along_axis[2];
       const double limits[2][2] = {{0.3, deg2rad(20.0)}, {0.5, deg2rad(30.0)}};
       for (int l = 0; l < 2; ++l) {
-        int ok = 0, total = 0;
+        int ok = 0, total = 0, along = 0;
         Noise n(o.seed + 60 + l);
         for (const RealPair& p : pairs) {
           for (int g = 0; g < 5; ++g) {
             const Pose2 guess = p.truth * fixtures::randomError(n, limits[l][0], limits[l][1]);
-            ok += success(mm.match(p.ref, p.cur, guess, m.method), p.truth);
+            const MatchResult result = mm.match(p.ref, p.cur, guess, m.method);
+            const bool succeeded = success(result, p.truth);
+            ok += succeeded;
+            along += !succeeded && alongFreeAxis(result, p);
             ++total;
           }
         }
         rates[l] = static_cast<double>(ok) / std::max(1, total);
+        along_axis[l] = static_cast<double>(along) / std::max(1, total);
       }
-      std::printf("      %-13s %15.1f%% %15.1f%%\n", m.name.c_str(), 100 * rates[0], 100 * rates[1]);
+      std::printf("      %-13s %8.1f%% (%4.1f%%) %8.1f%% (%4.1f%%)\n", m.name.c_str(), 100 * rates[0], 100 * along_axis[0],
+                  100 * rates[1], 100 * along_axis[1]);
     }
   }
 
