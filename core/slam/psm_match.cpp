@@ -42,4 +42,12 @@ std::optional<RobotFrameMatch> matchInRobotFrame(ScanMatcher& matcher, const Pre
   return match;
 }
 
+double errorIndexAt(ScanMatcher& matcher, const PreparedScan& reference, const Pose2& reference_mount,
+                    const PreparedScan& scan, const Pose2& mount, const Pose2& pose) {
+  MatchResult at;
+  at.pose = laserPoseInReferenceLaser(Pose2(), pose, reference_mount, mount);
+  matcher.estimateCovariance(reference, scan, at);
+  return at.error_index;
+}
+
 }  // namespace polarslam

@@ -37,4 +37,9 @@ std::optional<RobotFrameMatch> matchInRobotFrame(ScanMatcher& matcher, const Pre
                                                  const Pose2& mount, const Pose2& guess, const PsmSlamParams& params,
                                                  bool wide);
 
+/// The error index (mean |range residual|) of `scan` against `reference` with the robot at `pose`
+/// in the reference's robot frame, as a match ending there would report it.
+double errorIndexAt(ScanMatcher& matcher, const PreparedScan& reference, const Pose2& reference_mount,
+                    const PreparedScan& scan, const Pose2& mount, const Pose2& pose);
+
 }  // namespace polarslam

@@ -294,15 +294,21 @@ bool PsmSlam::plausibleOdometryFault(const RelativePosePrediction& prior, const 
          std::abs(disagreement.theta) <= params_.max_odometry_fault_rotation;
 }
 
-bool PsmSlam::applyTrackingMatch(const Observation& o) {
+bool PsmSlam::applyTrackingMatch(const Observation& o, const PreparedScan& scan, const Pose2& mount) {
   const int64_t active = filter_.activeKeyframe();
   const RelativePosePrediction prior = filter_.predictRelative(active);
   if (filter_.update(active, o.z, o.R, params_.chi2_gate).accepted) return true;
   // A good match with the nearby reference outside the gate: the odometry step, not the match,
   // is what is wrong (slip, heading jumps of 5-20 deg between scans on MIT CSAIL). Trust the
   // match and inflate the prior by the miss, within bounds that a tracking match from a prior
-  // that far off could still be right.
+  // that far off could still be right, and only if the odometry's pose fits the scans markedly
+  // worse: PSM can converge a few decimetres off along a corridor from a right prior, with a
+  // tight covariance, and following it puts a wrong loop closure in the graph later.
   if (!plausibleOdometryFault(prior, o)) return false;
+  const Keyframe& reference = keyframe(active);
+  if (errorIndexAt(matcher_, reference.scan, reference.laser_mount, scan, mount, prior.mean) <=
+      params_.odometry_fault_fit_ratio * o.error_index)
+    return false;
   inflatePriorForMiss(prior, o);
   return filter_.update(active, o.z, o.R, params_.chi2_gate).accepted;
 }
@@ -663,7 +669,7 @@ PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
       result.held = true;
       ++stats_.held_scans;
       result.map_matched = tracked->keyframe < map_keyframes_;
-    } else if (applyTrackingMatch(*tracked)) {
+    } else if (applyTrackingMatch(*tracked, *prepared, scan.laser_pose)) {
       result.tracked = true;
       ++stats_.tracked_scans;
       result.map_matched = tracked->keyframe < map_keyframes_;

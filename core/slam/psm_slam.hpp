@@ -193,9 +193,10 @@ class PsmSlam {
   /// Matches the scan against the active reference from the odometry prior, and from the
   /// previous motion when the two disagree (stale odometry); the better match wins.
   std::optional<Observation> trackReference(const PreparedScan& scan, const Pose2& mount);
-  /// Updates the filter with a good tracking match; when it fails the χ² gate but the miss is a
-  /// plausible odometry fault, the prior is inflated by the miss and the match applied.
-  bool applyTrackingMatch(const Observation& o);
+  /// Updates the filter with a good tracking match of `scan` (laser at `mount`); when it fails the
+  /// χ² gate but the miss is a plausible odometry fault and the odometry's pose fits the scan
+  /// markedly worse (odometry_fault_fit_ratio), the prior is inflated by the miss and the match applied.
+  bool applyTrackingMatch(const Observation& o, const PreparedScan& scan, const Pose2& mount);
   bool plausibleOdometryFault(const RelativePosePrediction& prior, const Observation& o) const;
   void inflatePriorForMiss(const RelativePosePrediction& prior, const Observation& o);
   bool goodMatch(const Observation& o, bool loop_candidate) const;

@@ -50,6 +50,8 @@ void describeMatches(ParameterTable& t, PsmSlamParams& p) {
   t.number("max_odometry_fault_translation", p.max_odometry_fault_translation, 0.0, 100.0,
            "m: a gated-out match this close to odometry or previous motion is an odometry fault");
   t.angle("max_odometry_fault_rotation_deg", p.max_odometry_fault_rotation, 0.0, 180.0, "the same for heading");
+  t.number("odometry_fault_fit_ratio", p.odometry_fault_fit_ratio, 0.0, 1e6,
+           "... if the odometry's pose misfits (error index) more than this times the match");
 }
 
 void describeReferences(ParameterTable& t, PsmSlamParams& p) {

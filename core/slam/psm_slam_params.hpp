@@ -113,6 +113,10 @@ struct PsmSlamParams {
   /// motion (stale odometry catching up); otherwise the match is rejected.
   double max_odometry_fault_translation = 0.3;  ///< m
   double max_odometry_fault_rotation = deg2rad(30.0);
+  /// ... and only when the odometry's own pose fits the reference scan markedly worse: its error
+  /// index more than this times the match's. Where the scans allow two poses a few decimetres
+  /// apart (a corridor's end seen from a turning robot), the odometry is then believed instead.
+  double odometry_fault_fit_ratio = 1.5;
 
   // --- reference scans (keyframes) ---
   double keyframe_distance = 0.6;        ///< m from the active reference scan
