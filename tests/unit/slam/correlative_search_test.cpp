@@ -46,6 +46,24 @@ struct LoopMap {
   }
 };
 
+/// Calls `visit` with every pose the search considers for `points` (resolution 0.1 m): the lattice
+/// within `radius` of `positions` (cells × cells from the origin), at every heading it takes.
+template <typename Visit>
+void forEverySearchedPose(const CorrelativeMapSearch& search, const std::vector<Vec2>& points,
+                          const std::vector<Vec2>& positions, double radius, int cells, Visit visit) {
+  double reach = 0.0;
+  for (const Vec2& p : points) reach = std::max(reach, p.norm());
+  const double step = std::acos(1.0 - 0.01 / (2.0 * reach * reach));
+  const int headings = static_cast<int>(std::ceil(2.0 * std::numbers::pi / step));
+  for (int h = 0; h < headings; ++h)
+    for (int j = 0; j < cells; ++j)
+      for (int i = 0; i < cells; ++i) {
+        const Pose2 pose(search.origin().x() + 0.1 * i, search.origin().y() + 0.1 * j, wrapAngle(2.0 * std::numbers::pi * h / headings));
+        if (std::any_of(positions.begin(), positions.end(), [&](const Vec2& c) { return (pose.translation() - c).norm() <= radius; }))
+          visit(pose);
+      }
+}
+
 TEST(CorrelativeMapSearch, FindsTheSamePoseAsScoringEveryPose) {
   // A small asymmetric room: an L of walls and a pillar.
   const std::vector<Vec2> map = pointsOf({{{0, 0}, {6, 0}}, {{6, 0}, {6, 4}}, {{0, 0}, {0, 2.5}}, {{2, 2}, {2.5, 2}}}, 0.05);
@@ -60,23 +78,12 @@ TEST(CorrelativeMapSearch, FindsTheSamePoseAsScoringEveryPose) {
   ASSERT_FALSE(found.places.empty());
 
   // Every searched pose scored: the same lattice and headings the search uses.
-  double reach = 0.0;
-  for (const Vec2& p : points) reach = std::max(reach, p.norm());
-  const double step = std::acos(1.0 - 0.01 / (2.0 * reach * reach));
-  const int headings = static_cast<int>(std::ceil(2.0 * std::numbers::pi / step));
   double best = 0.0;
   size_t scored = 0;
-  for (int h = 0; h < headings; ++h)
-    for (int j = 0; j < 120; ++j)
-      for (int i = 0; i < 120; ++i) {
-        const Pose2 pose(search.origin().x() + 0.1 * i, search.origin().y() + 0.1 * j, wrapAngle(2.0 * std::numbers::pi * h / headings));
-        const bool in_region = std::any_of(positions.begin(), positions.end(), [&](const Vec2& c) {
-          return (pose.translation() - c).norm() <= 0.99;
-        });
-        if (!in_region) continue;
-        ++scored;
-        best = std::max(best, search.score(points, pose));
-      }
+  forEverySearchedPose(search, points, positions, 0.99, 120, [&](const Pose2& pose) {
+    ++scored;
+    best = std::max(best, search.score(points, pose));
+  });
   EXPECT_GE(found.places.front().score, best - 1e-12) << "the search missed the best pose";
   EXPECT_NEAR(found.places.front().score, search.score(points, found.places.front().pose), 1e-12);
   EXPECT_LT(found.scored_nodes, scored / 5) << "branch and bound scored nearly every pose";
@@ -136,23 +143,16 @@ TEST(CorrelativeMapSearch, ReportsEveryPlaceWithinTheMarginAsScoringEveryPoseDoe
   ASSERT_FALSE(found.places.empty());
   const double floor = found.places.front().score - query.rival_margin;
 
-  double reach = 0.0;
-  for (const Vec2& p : points) reach = std::max(reach, p.norm());
-  const int headings = static_cast<int>(std::ceil(2.0 * std::numbers::pi / std::acos(1.0 - 0.01 / (2.0 * reach * reach))));
   size_t within_margin = 0;
-  for (int h = 0; h < headings; ++h)
-    for (int j = 0; j < 80; ++j)
-      for (int i = 0; i < 80; ++i) {
-        const Pose2 pose(search.origin().x() + 0.1 * i, search.origin().y() + 0.1 * j, wrapAngle(2.0 * std::numbers::pi * h / headings));
-        if ((pose.translation() - positions.front()).norm() > 0.79) continue;
-        const double score = search.score(points, pose);
-        ASSERT_LE(score, found.places.front().score + 1e-12) << "a pose beats the search's best";
-        if (score < floor) continue;
-        ++within_margin;
-        EXPECT_TRUE(std::any_of(found.places.begin(), found.places.end(), [&](const CorrelativeHit& place) {
-          return isNear(place.pose, pose, query.rival_distance, query.rival_heading);
-        })) << "no place reported near " << pose.x << " " << pose.y << " " << pose.theta << " scoring " << score;
-      }
+  forEverySearchedPose(search, points, positions, 0.79, 80, [&](const Pose2& pose) {
+    const double score = search.score(points, pose);
+    ASSERT_LE(score, found.places.front().score + 1e-12) << "a pose beats the search's best";
+    if (score < floor) return;
+    ++within_margin;
+    EXPECT_TRUE(std::any_of(found.places.begin(), found.places.end(), [&](const CorrelativeHit& place) {
+      return isNear(place.pose, pose, query.rival_distance, query.rival_heading);
+    })) << "no place reported near " << pose.x << " " << pose.y << " " << pose.theta << " scoring " << score;
+  });
   EXPECT_GT(within_margin, found.places.size()) << "the margin should hold more poses than places";
   EXPECT_GE(found.places.size(), 2u) << "the room's mirror image is a look-alike";
   for (size_t a = 0; a < found.places.size(); ++a) {

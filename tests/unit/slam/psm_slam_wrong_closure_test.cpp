@@ -62,15 +62,21 @@ size_t loopEdgesOffTheTruth(const PoseGraph& graph, const std::vector<PoseStampe
   return off;
 }
 
-TEST(PsmSlamWrongClosure, LookAlikeCorridorIsNotTakenForTheStart) {
-  const World world = loadWorld(std::string(POLARSLAM_SOURCE_DIR) + "/config/worlds/glass-partition-loop.yaml");
+/// PSM SLAM (default parameters) over the whole simulated run of `world_file` with `seed`, the
+/// graph optimised at the end; the sink keeps the truth.
+void runPsmSlam(const std::string& world_file, uint64_t seed, PsmSlam& slam, SlamSink& sink) {
+  const World world = loadWorld(std::string(POLARSLAM_SOURCE_DIR) + "/config/worlds/" + world_file);
   const RobotDescription robot = loadRobotDescription(std::string(POLARSLAM_SOURCE_DIR) + "/config/robots/default.yaml");
+  Simulator sim(world, robot, seed);
+  while (!sim.finished() && sim.time() < 600.0) sim.step(sink);
+  slam.optimize();
+}
+
+TEST(PsmSlamWrongClosure, LookAlikeCorridorIsNotTakenForTheStart) {
   for (const uint64_t seed : {1033u, 1058u, 1091u, 1092u}) {
     PsmSlam slam;
     SlamSink sink(slam);
-    Simulator sim(world, robot, seed);
-    while (!sim.finished() && sim.time() < 600.0) sim.step(sink);
-    slam.optimize();
+    runPsmSlam("glass-partition-loop.yaml", seed, slam, sink);
     ASSERT_FALSE(sink.truth.empty());
     EXPECT_LT(maxPositionError(slam.trajectory(), sink.truth), 1.0) << "seed " << seed;
     EXPECT_GE(slam.stats().loop_closures, 1u) << "seed " << seed << ": the right closure is still taken";
@@ -105,14 +111,10 @@ TEST(PsmSlamWrongClosure, SonarPlanesCarryTheLaserThroughTheGlassCorridor) {
 // offset. The odometry's pose fits that scan about as well, so the odometry is believed
 // (odometry_fault_fit_ratio) and the closure lands where the robot is.
 TEST(PsmSlamWrongClosure, TrackingBelievesTheOdometryWhereTheScanFitsTwoPlaces) {
-  const World world = loadWorld(std::string(POLARSLAM_SOURCE_DIR) + "/config/worlds/office.yaml");
-  const RobotDescription robot = loadRobotDescription(std::string(POLARSLAM_SOURCE_DIR) + "/config/robots/default.yaml");
   for (const uint64_t seed : {1013u, 1016u, 1026u, 1031u, 1034u}) {
     PsmSlam slam;
     SlamSink sink(slam);
-    Simulator sim(world, robot, seed);
-    while (!sim.finished() && sim.time() < 600.0) sim.step(sink);
-    slam.optimize();
+    runPsmSlam("office.yaml", seed, slam, sink);
     ASSERT_FALSE(sink.truth.empty());
     EXPECT_EQ(loopEdgesOffTheTruth(slam.graph(), sink.truth), 0u) << "seed " << seed;
     EXPECT_GE(slam.stats().loop_closures, 1u) << "seed " << seed;
