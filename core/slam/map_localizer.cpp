@@ -107,22 +107,28 @@ bool MapLocalizer::goodFix(const Fix& fix, bool global) const {
          fix.cov.allFinite();
 }
 
-bool MapLocalizer::odometryFaultExplains(const Pose2& measured) const {
+bool MapLocalizer::odometryFaultExplains(const Pose2& measured, double match_error_index, const PreparedScan& reference,
+                                         const Pose2& reference_pose, const Pose2& reference_mount,
+                                         const PreparedScan& scan, const Pose2& mount) {
   auto within = [&](const Pose2& from) {
     return isNear(from, measured, params_.max_odometry_fault_translation, params_.max_odometry_fault_rotation);
   };
-  return within(pose_) || within(constantVelocityPose());
+  if (!within(pose_) && !within(constantVelocityPose())) return false;
+  // As PSM SLAM (psm_slam.cpp): where the predicted pose fits about as well, the scans allow both.
+  return errorIndexAt(matcher_, reference, reference_mount, scan, mount, between(reference_pose, pose_)) >
+         params_.odometry_fault_fit_ratio * match_error_index;
 }
 
 bool MapLocalizer::withinGate(const Vec3& innovation, const Mat3& innovation_cov) const {
   return innovation.dot(innovation_cov.ldlt().solve(innovation)) <= params_.chi2_gate;
 }
 
-bool MapLocalizer::applyFix(const Fix& fix) {
+bool MapLocalizer::applyFix(const Fix& fix, const PreparedScan& scan, const Pose2& mount) {
   const Vec3 nu = poseDifference(fix.pose, pose_);
   Mat3 S = cov_ + fix.cov;
   if (!withinGate(nu, S)) {
-    if (!odometryFaultExplains(fix.pose)) {
+    const Reference& ref = references_[fix.reference];
+    if (!odometryFaultExplains(fix.pose, fix.error_index, ref.scan, ref.pose, ref.laser_mount, scan, mount)) {
       ++stats_.gate_rejections;
       return false;
     }
@@ -168,7 +174,7 @@ MapLocalizer::Tracked MapLocalizer::track(const PreparedScan& scan, const Pose2&
       std::optional<Fix> fix = match(i, scan, mount, between(references_[i].pose, prior), false);
       if (fix && goodFix(*fix, false) && (!best || fix->error_index < best->error_index)) best = fix;
     }
-  if (best && applyFix(*best)) {
+  if (best && applyFix(*best, scan, mount)) {
     result.matched = true;
     result.reference = references_[best->reference].id;
     unmatched_near_map_ = 0;
@@ -200,7 +206,8 @@ bool MapLocalizer::trackNewGround(const PreparedScan& scan, const Pose2& mount) 
   fix.error_index = m->error_index;
   fix.overlap = m->overlap;
   if (!goodFix(fix, false)) return false;
-  if (!withinGate(poseDifference(fix.pose, pose_), cov_ + fix.cov) && !odometryFaultExplains(fix.pose)) {
+  if (!withinGate(poseDifference(fix.pose, pose_), cov_ + fix.cov) &&
+      !odometryFaultExplains(fix.pose, fix.error_index, ref.scan, ref.pose, ref.laser_mount, scan, mount)) {
     ++stats_.gate_rejections;
     return false;
   }

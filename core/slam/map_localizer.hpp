@@ -172,13 +172,18 @@ class MapLocalizer {
   bool searchDue(const Pose2& predicted) const;
   void searchAndConfirm(const LaserScan& raw, const PreparedScan& scan, const Pose2& predicted,
                         MapLocalizationResult& result);
-  bool applyFix(const Fix& fix);
+  /// Applies a good match of `scan` (laser at `mount`) with the map; false if gated out.
+  bool applyFix(const Fix& fix, const PreparedScan& scan, const Pose2& mount);
   /// Where the robot would be had it kept the motion between the last two scans (real odometry
   /// goes stale and catches up in one jump; PSM SLAM matches from this prior too).
   Pose2 constantVelocityPose() const { return last_scan_pose_ * last_scan_motion_; }
-  /// Whether a measured pose is within an odometry fault of the prediction or of the previous
-  /// motion kept up (a good match just outside the gate is then taken, not rejected).
-  bool odometryFaultExplains(const Pose2& measured) const;
+  /// Whether a gated-out match (pose `measured`, error index `match_error_index`, of `scan` against
+  /// `reference` taken at `reference_pose`) is an odometry fault: it lies within an odometry fault
+  /// of the prediction or of the previous motion kept up, and the prediction fits the scan
+  /// markedly worse (odometry_fault_fit_ratio). Then it is taken, not rejected.
+  bool odometryFaultExplains(const Pose2& measured, double match_error_index, const PreparedScan& reference,
+                             const Pose2& reference_pose, const Pose2& reference_mount, const PreparedScan& scan,
+                             const Pose2& mount);
   bool withinGate(const Vec3& innovation, const Mat3& innovation_cov) const;
   /// Global search: the unambiguous best hit of `points` (robot frame, `raw` the current scan), if
   /// any; `current` is where the robot is thought to be now (tracked, or dead reckoning). A known
