@@ -114,9 +114,8 @@ bool MapLocalizer::odometryFaultExplains(const Pose2& measured, double match_err
     return isNear(from, measured, params_.max_odometry_fault_translation, params_.max_odometry_fault_rotation);
   };
   if (!within(pose_) && !within(constantVelocityPose())) return false;
-  // As PSM SLAM (psm_slam.cpp): where the predicted pose fits about as well, the scans allow both.
-  return errorIndexAt(matcher_, reference, reference_mount, scan, mount, between(reference_pose, pose_)) >
-         params_.odometry_fault_fit_ratio * match_error_index;
+  return predictionMisfits(matcher_, reference, reference_mount, scan, mount, between(reference_pose, pose_),
+                           match_error_index, params_);
 }
 
 bool MapLocalizer::withinGate(const Vec3& innovation, const Mat3& innovation_cov) const {

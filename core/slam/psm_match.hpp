@@ -37,9 +37,13 @@ std::optional<RobotFrameMatch> matchInRobotFrame(ScanMatcher& matcher, const Pre
                                                  const Pose2& mount, const Pose2& guess, const PsmSlamParams& params,
                                                  bool wide);
 
-/// The error index (mean |range residual|) of `scan` against `reference` with the robot at `pose`
-/// in the reference's robot frame, as a match ending there would report it.
-double errorIndexAt(ScanMatcher& matcher, const PreparedScan& reference, const Pose2& reference_mount,
-                    const PreparedScan& scan, const Pose2& mount, const Pose2& pose);
+/// Whether the predicted robot pose (`predicted`, in the reference's robot frame) fits `scan` to
+/// `reference` markedly worse than a match of error index `match_error_index` does: its error
+/// index (mean |range residual|, as a match ending there would report it) is more than
+/// params.odometry_fault_fit_ratio times the match's. Only then is a match outside the gate an
+/// odometry fault; otherwise the scans allow both poses and the odometry is believed.
+bool predictionMisfits(ScanMatcher& matcher, const PreparedScan& reference, const Pose2& reference_mount,
+                       const PreparedScan& scan, const Pose2& mount, const Pose2& predicted, double match_error_index,
+                       const PsmSlamParams& params);
 
 }  // namespace polarslam

@@ -306,8 +306,7 @@ bool PsmSlam::applyTrackingMatch(const Observation& o, const PreparedScan& scan,
   // tight covariance, and following it puts a wrong loop closure in the graph later.
   if (!plausibleOdometryFault(prior, o)) return false;
   const Keyframe& reference = keyframe(active);
-  if (errorIndexAt(matcher_, reference.scan, reference.laser_mount, scan, mount, prior.mean) <=
-      params_.odometry_fault_fit_ratio * o.error_index)
+  if (!predictionMisfits(matcher_, reference.scan, reference.laser_mount, scan, mount, prior.mean, o.error_index, params_))
     return false;
   inflatePriorForMiss(prior, o);
   return filter_.update(active, o.z, o.R, params_.chi2_gate).accepted;
