@@ -113,6 +113,8 @@ nlohmann::json localizationReportJson(const MapLocalizer& localizer, double seco
           {"global_unconfirmed", s.global_unconfirmed},
           {"doubt_searches", s.doubt_searches},
           {"doubts", s.doubts},
+          {"doubt_seconds", s.doubt_seconds},
+          {"search_seconds", s.search_seconds},
           {"fixes", s.fixes},
           {"losses", s.losses},
           {"first_fix_scan", s.first_fix_scan},

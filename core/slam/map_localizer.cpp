@@ -1,5 +1,6 @@
 #include "slam/map_localizer.hpp"
 
+#include "io/stopwatch.hpp"
 #include "slam/psm_match.hpp"
 
 #include <Eigen/Cholesky>
@@ -342,6 +343,14 @@ bool MapLocalizer::doubt(const LaserScan& scan, const Pose2& tracked) {
     return false;
   last_doubt_at_ = tracked;
   ++stats_.doubt_searches;
+  const auto start = std::chrono::steady_clock::now();
+  const bool elsewhere = foundElsewhere(scan, *prepared, tracked);
+  stats_.doubt_seconds += secondsSince(start);
+  if (elsewhere) ++stats_.doubts;
+  return elsewhere;
+}
+
+bool MapLocalizer::foundElsewhere(const LaserScan& scan, const PreparedScan& prepared, const Pose2& tracked) {
   const std::vector<Vec2> points = sequencePoints(doubted_, tracked);
   // The place must explain the scans markedly better than the tracked pose does, as a rival must;
   // the best pose within the refinement window around it stands for it (a tracked pose a few
@@ -359,12 +368,10 @@ bool MapLocalizer::doubt(const LaserScan& scan, const Pose2& tracked) {
   if (isNear(best_pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading) &&
       field_->seeThrough(scan, best_pose, options_.global_see_through_clearance) <= seeThroughLimit(scan, tracked))
     return false;
-  const std::optional<Fix> place = searchGlobally(scan, *prepared, points, tracked, best.places.front().score);
+  const std::optional<Fix> place = searchGlobally(scan, prepared, points, tracked, best.places.front().score);
   if (!place || isNear(place->pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading))
     return false;
-  if (1.0 - tracked_score <= options_.global_misfit_ratio * (1.0 - place->score)) return false;
-  ++stats_.doubts;
-  return true;
+  return 1.0 - tracked_score > options_.global_misfit_ratio * (1.0 - place->score);
 }
 
 void MapLocalizer::lose() {
@@ -448,7 +455,11 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
   } else {
     result.usable = true;
     keepRecent(searched_, {predicted, searchPoints(scan)});
-    if (searchDue(predicted)) searchAndConfirm(scan, *prepared, predicted, result);
+    if (searchDue(predicted)) {
+      const auto start = std::chrono::steady_clock::now();
+      searchAndConfirm(scan, *prepared, predicted, result);
+      stats_.search_seconds += secondsSince(start);
+    }
     if (localized_) searched_.clear();
   }
   dead_reckoning_.push_back(predicted);

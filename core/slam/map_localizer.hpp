@@ -81,6 +81,8 @@ struct MapLocalizerStats {
   size_t fixes = 0;                ///< global searches that localized the robot
   size_t losses = 0;               ///< times tracking was lost (kidnapping, odometry failure)
   int64_t first_fix_scan = -1;     ///< scan index (0-based) of the first fix
+  double doubt_seconds = 0.0;      ///< wall-clock time in doubt searches
+  double search_seconds = 0.0;     ///< ... in global searches while lost
 };
 
 class MapLocalizer {
@@ -199,6 +201,8 @@ class MapLocalizer {
   /// kMaxSequenceScans back (a robot standing still): the list stays bounded however long it is lost.
   void keepRecent(std::vector<SearchedScan>& scans, SearchedScan latest) const;
   static constexpr size_t kMaxSequenceScans = 400;
+  /// The doubt search proper: a place elsewhere explains the doubted scans markedly better.
+  bool foundElsewhere(const LaserScan& scan, const PreparedScan& prepared, const Pose2& tracked);
   /// The window around the search's pose in which the current scan alone is placed.
   static constexpr double kRefineTranslation = 0.3;  ///< m
   static constexpr double kRefineRotation = deg2rad(8.0);
