@@ -39,17 +39,44 @@ void PsmSlamFilter::reset(const Pose2& pose, const Mat3& cov) {
   flushes_ = 0;
 }
 
+Mat3 PsmSlamFilter::block(Eigen::Index s, Eigen::Index t) const {
+  if (s > t) return P_.block<3, 3>(s, t);
+  if (s < t) return P_.block<3, 3>(t, s).transpose();
+  return P_.block<3, 3>(s, s).selfadjointView<Eigen::Lower>();
+}
+
+void PsmSlamFilter::setBlock(Eigen::Index s, Eigen::Index t, const Mat3& value) {
+  if (s >= t) P_.block<3, 3>(s, t) = value;
+  else P_.block<3, 3>(t, s) = value.transpose();
+}
+
+Eigen::MatrixXd PsmSlamFilter::column(Eigen::Index t) const {
+  const Eigen::Index n = static_cast<Eigen::Index>(dimension());
+  Eigen::MatrixXd c(n, 3);
+  c.topRows(t) = P_.block(t, 0, 3, t).transpose();
+  c.middleRows<3>(t) = block(t, t);
+  c.bottomRows(n - t - 3) = P_.block(t + 3, t, n - t - 3, 3);
+  return c;
+}
+
+void PsmSlamFilter::setColumn(Eigen::Index t, const Eigen::MatrixXd& value) {
+  const Eigen::Index n = static_cast<Eigen::Index>(dimension());
+  P_.block(t, 0, 3, t) = value.topRows(t).transpose();
+  P_.block<3, 3>(t, t) = value.middleRows<3>(t);
+  P_.block(t + 3, t, n - t - 3, 3) = value.bottomRows(n - t - 3);
+}
+
 void PsmSlamFilter::loadLocal() {
   local_x_.setZero();
   local_P_.setZero();
   local_x_.head<3>() = x_.head<3>();
-  local_P_.topLeftCorner<3, 3>() = P_.topLeftCorner<3, 3>();
+  local_P_.topLeftCorner<3, 3>() = block(0, 0);
   if (active_slot_ != 0) {
     const Eigen::Index a = offset(active_slot_);
     local_x_.tail<3>() = x_.segment<3>(a);
-    local_P_.block<3, 3>(0, 3) = P_.block<3, 3>(0, a);
-    local_P_.block<3, 3>(3, 0) = P_.block<3, 3>(a, 0);
-    local_P_.block<3, 3>(3, 3) = P_.block<3, 3>(a, a);
+    local_P_.block<3, 3>(0, 3) = block(0, a);
+    local_P_.block<3, 3>(3, 0) = block(a, 0);
+    local_P_.block<3, 3>(3, 3) = block(a, a);
   }
   phi_.setIdentity();
   psi_.setZero();
@@ -63,25 +90,22 @@ void PsmSlamFilter::flush() {
   if (pending_ && active_slot_ != 0) {
     // W = P(:, A) at the last flush; the rows of A itself are overwritten below.
     Eigen::MatrixXd W(n, 6);
-    W.leftCols<3>() = P_.block(0, 0, n, 3);
-    W.rightCols<3>() = P_.block(0, a, n, 3);
+    W.leftCols<3>() = column(0);
+    W.rightCols<3>() = column(a);
     const Eigen::MatrixXd W_psi = W * psi_;
-    P_.topLeftCorner(n, n).noalias() -= W_psi * W.transpose();
+    P_.topLeftCorner(n, n).triangularView<Eigen::Lower>() -= W_psi * W.transpose();
     x_.head(n).noalias() += W * theta_;
     const Eigen::MatrixXd cross = W * phi_.transpose();  // P(B, A) now
-    P_.block(0, 0, n, 3) = cross.leftCols<3>();
-    P_.block(0, a, n, 3) = cross.rightCols<3>();
-    P_.block(0, 0, 3, n) = cross.leftCols<3>().transpose();
-    P_.block(a, 0, 3, n) = cross.rightCols<3>().transpose();
+    setColumn(0, cross.leftCols<3>());
+    setColumn(a, cross.rightCols<3>());
     ++flushes_;
   }
   x_.head<3>() = local_x_.head<3>();
-  P_.topLeftCorner<3, 3>() = local_P_.topLeftCorner<3, 3>();
+  setBlock(0, 0, local_P_.topLeftCorner<3, 3>());
   if (active_slot_ != 0) {
     x_.segment<3>(a) = local_x_.tail<3>();
-    P_.block<3, 3>(0, a) = local_P_.block<3, 3>(0, 3);
-    P_.block<3, 3>(a, 0) = local_P_.block<3, 3>(3, 0);
-    P_.block<3, 3>(a, a) = local_P_.block<3, 3>(3, 3);
+    setBlock(a, 0, local_P_.block<3, 3>(3, 0));
+    setBlock(a, a, local_P_.block<3, 3>(3, 3));
   }
   loadLocal();
 }
@@ -131,12 +155,12 @@ void PsmSlamFilter::addKeyframe(int64_t id) {
   if (hasKeyframe(id)) throw std::invalid_argument("keyframe " + std::to_string(id) + " is already in the filter");
   flush();
   const size_t slot = allocateSlot();
-  const Eigen::Index s = offset(slot), n = static_cast<Eigen::Index>(dimension());
+  const Eigen::Index s = offset(slot);
   // The new keyframe is a copy of the robot pose: its row and column are the robot's.
   x_.segment<3>(s) = x_.head<3>();
-  P_.block(s, 0, 3, n) = P_.block(0, 0, 3, n);
-  P_.block(0, s, n, 3) = P_.block(0, 0, n, 3);
-  P_.block<3, 3>(s, s) = P_.topLeftCorner<3, 3>();
+  Eigen::MatrixXd robot = column(0);
+  robot.middleRows<3>(s) = robot.topRows<3>();
+  setColumn(s, robot);
   slot_of_[id] = slot;
   active_id_ = id;
   active_slot_ = slot;
@@ -149,9 +173,9 @@ void PsmSlamFilter::addIndependentKeyframe(int64_t id, const Pose2& pose, const 
   const size_t slot = allocateSlot();
   const Eigen::Index s = offset(slot), n = static_cast<Eigen::Index>(dimension());
   x_.segment<3>(s) = pose.vec();
-  P_.block(s, 0, 3, n).setZero();
-  P_.block(0, s, n, 3).setZero();
-  P_.block<3, 3>(s, s) = cov;
+  Eigen::MatrixXd independent = Eigen::MatrixXd::Zero(n, 3);
+  independent.middleRows<3>(s) = cov;
+  setColumn(s, independent);
   slot_of_[id] = slot;
   loadLocal();
 }
@@ -162,8 +186,7 @@ void PsmSlamFilter::removeKeyframe(int64_t id) {
   flush();
   const Eigen::Index s = offset(slot), n = static_cast<Eigen::Index>(dimension());
   x_.segment<3>(s).setZero();
-  P_.block(s, 0, 3, n).setZero();
-  P_.block(0, s, n, 3).setZero();
+  setColumn(s, Eigen::MatrixXd::Zero(n, 3));
   slot_of_.erase(id);
   free_slots_.push_back(slot);
   loadLocal();
@@ -183,7 +206,7 @@ Pose2 PsmSlamFilter::keyframePose(int64_t id) const {
   if (slot == active_slot_) return Pose2(local_x_.tail<3>());
   const Eigen::Index s = offset(slot), a = offset(active_slot_);
   Vec3 x = x_.segment<3>(s);
-  if (pending_) x += P_.block<3, 3>(s, 0) * theta_.head<3>() + P_.block<3, 3>(s, a) * theta_.tail<3>();
+  if (pending_) x += block(s, 0) * theta_.head<3>() + block(s, a) * theta_.tail<3>();
   return Pose2(x);
 }
 
@@ -191,10 +214,10 @@ Mat3 PsmSlamFilter::keyframeCovariance(int64_t id) const {
   const size_t slot = slotOf(id);
   if (slot == active_slot_) return local_P_.bottomRightCorner<3, 3>();
   const Eigen::Index s = offset(slot), a = offset(active_slot_);
-  Mat3 P = P_.block<3, 3>(s, s);
+  Mat3 P = block(s, s);
   if (pending_) {
     Mat36 P_kA;
-    P_kA << P_.block<3, 3>(s, 0), P_.block<3, 3>(s, a);
+    P_kA << block(s, 0), block(s, a);
     P -= P_kA * psi_ * P_kA.transpose();
   }
   return P;
@@ -212,7 +235,7 @@ RelativePosePrediction PsmSlamFilter::predictRelative(int64_t id) const {
     const Eigen::Index s = offset(slot), a = offset(active_slot_);
     P_kk = keyframeCovariance(id);
     Eigen::Matrix<double, 6, 3> P_Ak;
-    P_Ak << P_.block<3, 3>(0, s), P_.block<3, 3>(a, s);
+    P_Ak << block(0, s), block(a, s);
     P_rk = (phi_ * P_Ak).topRows<3>();
   }
   const RelativePoseJacobians J = relativePoseJacobians(keyframe, robot);
@@ -274,7 +297,7 @@ Eigen::VectorXd PsmSlamFilter::stateMean() {
 Eigen::MatrixXd PsmSlamFilter::stateCovariance() {
   flush();
   const Eigen::Index n = static_cast<Eigen::Index>(dimension());
-  return P_.topLeftCorner(n, n);
+  return P_.topLeftCorner(n, n).selfadjointView<Eigen::Lower>();
 }
 
 }  // namespace polarslam

@@ -99,7 +99,16 @@ class PsmSlamFilter {
   /// Index of the first state element of a slot (slot 0 is the robot).
   static Eigen::Index offset(size_t slot) { return static_cast<Eigen::Index>(3 * slot); }
 
+  /// 3×3 block (row slot offset s, column t) of the whole covariance at the last flush.
+  Mat3 block(Eigen::Index s, Eigen::Index t) const;
+  void setBlock(Eigen::Index s, Eigen::Index t, const Mat3& value);
+  /// The n×3 column of slot offset t, and writing one (its row too: P is symmetric).
+  Eigen::MatrixXd column(Eigen::Index t) const;
+  void setColumn(Eigen::Index t, const Eigen::MatrixXd& value);
+
   // Whole state at the last flush: slot 0 = robot, slot s ≥ 1 = a keyframe or free (zeros).
+  // Only P_'s lower triangle is kept (block() and column() read it): a flush updates half the
+  // elements, and the flushes are most of PSM SLAM's time over a long run.
   Eigen::VectorXd x_;
   Eigen::MatrixXd P_;
   size_t slot_end_ = 1;  ///< one past the highest slot ever used
