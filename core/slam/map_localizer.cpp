@@ -1,6 +1,5 @@
 #include "slam/map_localizer.hpp"
 
-#include "io/stopwatch.hpp"
 #include "slam/psm_match.hpp"
 
 #include <Eigen/Cholesky>
@@ -8,6 +7,7 @@
 #include <Eigen/LU>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -345,7 +345,7 @@ bool MapLocalizer::doubt(const LaserScan& scan, const Pose2& tracked) {
   ++stats_.doubt_searches;
   const auto start = std::chrono::steady_clock::now();
   const bool elsewhere = foundElsewhere(scan, *prepared, tracked);
-  stats_.doubt_seconds += secondsSince(start);
+  stats_.doubt_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (elsewhere) ++stats_.doubts;
   return elsewhere;
 }
@@ -458,7 +458,7 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
     if (searchDue(predicted)) {
       const auto start = std::chrono::steady_clock::now();
       searchAndConfirm(scan, *prepared, predicted, result);
-      stats_.search_seconds += secondsSince(start);
+      stats_.search_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     if (localized_) searched_.clear();
   }
