@@ -10,17 +10,30 @@
 
 namespace polarslam {
 
+int64_t halfwayLaserTime(const std::vector<CarmenEvent>& events) {
+  std::vector<int64_t> stamps;
+  for (const CarmenEvent& e : events)
+    if (e.isLaser()) stamps.push_back(e.utime());
+  if (stamps.empty()) return 0;
+  std::sort(stamps.begin(), stamps.end());
+  return stamps[stamps.size() / 2];
+}
+
+void runOverLog(Estimator& estimator, const std::vector<CarmenEvent>& events, int64_t until_utime) {
+  for (const CarmenEvent& e : events) {
+    if (e.utime() >= until_utime) continue;
+    if (e.isLaser()) estimator.onLaser(e.laser());
+    else estimator.onOdometry(e.odometry());
+  }
+  nlohmann::json report;
+  estimator.finish("", report);
+}
+
 MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, int64_t split_utime,
                                       const PsmSlamEstimatorConfig& config, const MapThenLocalizeOptions& options) {
   MapThenLocalizeResult result;
   PsmSlamEstimator mapping(config);
-  for (const CarmenEvent& e : events) {
-    if (e.utime() >= split_utime) continue;
-    if (e.isLaser()) mapping.onLaser(e.laser());
-    else mapping.onOdometry(e.odometry());
-  }
-  nlohmann::json report;
-  mapping.finish("", report);
+  runOverLog(mapping, events, split_utime);
   result.mapped = mapping.trajectory();
   if (!result.mapped.empty()) result.mapped_end = result.mapped.back().pose;
   StoredMap map = mapping.storedMap();

@@ -6,6 +6,7 @@
 // mapped part then the localised part in one frame, is what relation metrics score across the
 // split.
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "io/carmen.hpp"
@@ -32,11 +33,23 @@ struct MapThenLocalizeResult {
   double localized_duration_s = 0.0;   ///< data time of the localised part
 };
 
+/// Far from any map a log makes (250 m, −120 m, 2 rad): odometry moved by it says nothing about
+/// where the robot starts in the map.
+inline const Pose2 kOdometryFarAway(250.0, -120.0, 2.0);
+
 struct MapThenLocalizeOptions {
   Pose2 odometry_moved_by;        ///< rigid transform applied to every odometry reading after the split
   bool known_start = false;       ///< start from the mapping's last pose instead of searching
   bool continue_mapping = false;  ///< --mode continue (new reference scans join the map) instead of localize
 };
+
+/// Where issue 15's check splits a log: the time of its middle laser scan.
+int64_t halfwayLaserTime(const std::vector<CarmenEvent>& events);
+
+/// Feeds the odometry and laser scans of `events` before `until_utime` to `estimator` and
+/// finishes it (no output files).
+void runOverLog(Estimator& estimator, const std::vector<CarmenEvent>& events,
+                int64_t until_utime = std::numeric_limits<int64_t>::max());
 
 MapThenLocalizeResult mapThenLocalize(const std::vector<CarmenEvent>& events, int64_t split_utime,
                                       const PsmSlamEstimatorConfig& config, const MapThenLocalizeOptions& options);

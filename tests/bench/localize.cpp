@@ -42,25 +42,16 @@ int main(int argc, char** argv) {
   }
   const CarmenLog log = readCarmenLogFile(log_path);
   const std::vector<Relation> relations = readRelations(relations_path);
-  std::vector<int64_t> stamps;
-  for (const CarmenEvent& e : log.events)
-    if (e.isLaser()) stamps.push_back(e.utime());
-  std::sort(stamps.begin(), stamps.end());
-  const int64_t split = stamps[stamps.size() / 2];
+  const int64_t split = halfwayLaserTime(log.events);
   PsmSlamEstimatorConfig config = loadPsmSlamEstimatorConfig(config_path);
   if (temporary_mapping) config.slam.localization.temporary_mapping = true;
 
   PsmSlamEstimator full_run(config);
-  for (const CarmenEvent& e : log.events) {
-    if (e.isLaser()) full_run.onLaser(e.laser());
-    else full_run.onOdometry(e.odometry());
-  }
-  nlohmann::json report;
-  full_run.finish("", report);
+  runOverLog(full_run, log.events);
   const RelationMetric full = evaluateRelations(full_run.trajectory(), relations);
 
   MapThenLocalizeOptions options;
-  options.odometry_moved_by = Pose2(250.0, -120.0, 2.0);
+  options.odometry_moved_by = kOdometryFarAway;
   options.continue_mapping = continue_mapping;
   const MapThenLocalizeResult result = mapThenLocalize(log.events, split, config, options);
   const RelationMetric joined = evaluateRelations(result.joined, relations);

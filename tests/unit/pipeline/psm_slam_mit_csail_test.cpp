@@ -6,7 +6,6 @@
 // are absent.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -38,12 +37,7 @@ class PsmSlamMitCsail : public ::testing::Test {
 /// Full-run PSM SLAM's final trajectory over `log`.
 std::vector<PoseStamped> fullRun(const CarmenLog& log, const PsmSlamEstimatorConfig& config) {
   PsmSlamEstimator estimator(config);
-  for (const auto& e : log.events) {
-    if (e.isLaser()) estimator.onLaser(e.laser());
-    else estimator.onOdometry(e.odometry());
-  }
-  nlohmann::json report;
-  estimator.finish("", report);
+  runOverLog(estimator, log.events);
   return estimator.trajectory();
 }
 
@@ -64,14 +58,10 @@ TEST_F(PsmSlamMitCsail, TheSecondHalfLocalisedInTheFirstHalfsMapKeepsTheRelation
   const CarmenLog log = readCarmenLogFile(kLogPath);
   const std::vector<Relation> relations = readRelations(kRelationsPath);
   const PsmSlamEstimatorConfig config = loadPsmSlamEstimatorConfig(std::string(POLARSLAM_SOURCE_DIR) + "/config/psm-slam.yaml");
-  std::vector<int64_t> stamps;
-  for (const CarmenEvent& e : log.events)
-    if (e.isLaser()) stamps.push_back(e.utime());
-  std::sort(stamps.begin(), stamps.end());
-  const int64_t split = stamps[stamps.size() / 2];
+  const int64_t split = halfwayLaserTime(log.events);
   const double full = evaluateRelations(fullRun(log, config), relations).translation.mean;
   MapThenLocalizeOptions options;
-  options.odometry_moved_by = Pose2(250.0, -120.0, 2.0);
+  options.odometry_moved_by = kOdometryFarAway;
   for (const bool known_start : {false, true}) {
     options.known_start = known_start;
     const MapThenLocalizeResult result = mapThenLocalize(log.events, split, config, options);
