@@ -142,20 +142,34 @@ bool CorrelativeMapSearch::regionAllows(int level, int x, int y) const {
   return region_[static_cast<size_t>(level)][static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)] != 0;
 }
 
-int CorrelativeMapSearch::nodeSum(const HeadingGroup& group, int level, int x, int y) const {
+int CorrelativeMapSearch::nodeSum(const HeadingGroup& group, int level, int x, int y, int max_deficit) const {
   // The cells a point lands in over the node: its lowest cell plus the translations and the
   // group's extent. The smallest window holding them all gives the bound.
   int window_level = level;
   while ((1 << window_level) < (1 << level) + group.extent) ++window_level;
-  if (window_level >= static_cast<int>(levels_.size())) return static_cast<int>(kScoreScale) * static_cast<int>(group.dx.size());
+  const int scale = static_cast<int>(kScoreScale);
+  if (window_level >= static_cast<int>(levels_.size())) return scale * static_cast<int>(group.dx.size());
+  // Most nodes scored are pruned: once the points so far fall short of a perfect score by more
+  // than max_deficit, the sum so far is returned (it is below what the node needs, as the whole is).
+  constexpr size_t kBatch = 8;
+  const size_t n = group.dx.size();
   int sum = 0;
   if (x + group.min_dx >= 0 && y + group.min_dy >= 0 && x + group.max_dx < width_ && y + group.max_dy < height_) {
     // Every point lands in the grid (the usual case): no clamping.
     const uint8_t* base =
         &levels_[static_cast<size_t>(window_level)][static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
-    for (const std::ptrdiff_t offset : group.offsets) sum += base[offset];
+    const std::ptrdiff_t* offsets = group.offsets.data();
+    size_t i = 0;
+    for (; i + kBatch <= n; i += kBatch) {
+      for (size_t k = i; k < i + kBatch; ++k) sum += base[offsets[k]];
+      if (scale * static_cast<int>(i + kBatch) - sum > max_deficit) return sum;
+    }
+    for (; i < n; ++i) sum += base[offsets[i]];
   } else {
-    for (size_t i = 0; i < group.dx.size(); ++i) sum += cellValue(window_level, x + group.dx[i], y + group.dy[i]);
+    for (size_t i = 0; i < n; ++i) {
+      sum += cellValue(window_level, x + group.dx[i], y + group.dy[i]);
+      if (scale * static_cast<int>(i + 1) - sum > max_deficit) return sum;
+    }
   }
   return sum;
 }
@@ -254,15 +268,26 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
   const int points_count = static_cast<int>(usable.size());
   const auto score_of = [&](int sum) { return sum / (kScoreScale * points_count); };
   BucketQueue<Node> open(static_cast<int>(kScoreScale) * points_count);
-  const auto consider = [&](const Node& node, double threshold) {
+  // The largest shortfall of a node's sum from a perfect one that still scores `threshold`.
+  const auto allowed_deficit = [&](double threshold) {
+    const int perfect = static_cast<int>(kScoreScale) * points_count;
+    int deficit = static_cast<int>(std::clamp(std::floor((1.0 - threshold) * perfect), -1.0, static_cast<double>(perfect)));
+    while (deficit >= 0 && score_of(perfect - deficit) < threshold) --deficit;
+    while (deficit < perfect && score_of(perfect - deficit - 1) >= threshold) ++deficit;
+    return deficit;
+  };
+  double threshold = query.min_score;
+  int max_deficit = allowed_deficit(threshold);
+  const auto consider = [&](int x, int y, int level, int group) {
     ++result.scored_nodes;
-    if (score_of(node.sum) >= threshold) open.push(node.sum, node);
+    const int sum = nodeSum(groups[static_cast<size_t>(group)], level, x, y, max_deficit);
+    if (score_of(sum) >= threshold) open.push(sum, {x, y, level, group, sum});
   };
   const int root_level = groups[roots_begin].level;
   for (size_t g = roots_begin; g < groups.size() && groups[g].level == root_level; ++g)
     for (int y = 0; y < height_; y += span)
       for (int x = 0; x < width_; x += span)
-        if (regionAllows(top, x, y)) consider({x, y, top, static_cast<int>(g), nodeSum(groups[g], top, x, y)}, query.min_score);
+        if (regionAllows(top, x, y)) consider(x, y, top, static_cast<int>(g));
   // Leaves come out best first: the first of each place is its best pose. A node whose every pose
   // is near a place found already can add none: it is not expanded.
   const auto within_a_place = [&](const Node& node, const HeadingGroup& group) {
@@ -278,7 +303,6 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
       return true;
     });
   };
-  double threshold = query.min_score;
   while (open.topKey() >= 0 && score_of(open.topKey()) >= threshold) {
     const Node node = open.pop();
     const HeadingGroup& group = groups[static_cast<size_t>(node.group)];
@@ -286,20 +310,19 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
     if (node.level == 0 && group.level == 0) {
       result.places.push_back({poseOf(group.first, headings, node.x, node.y), score_of(node.sum)});
       threshold = std::max(threshold, result.places.front().score - query.rival_margin);
+      max_deficit = allowed_deficit(threshold);
       continue;
     }
     // Branch on what loosens the bound more: the headings' spread or the translations'.
     if (group.level > 0 && (node.level == 0 || group.extent > (1 << node.level))) {
       for (const int child : group.children)
-        if (child >= 0)
-          consider({node.x, node.y, node.level, child, nodeSum(groups[static_cast<size_t>(child)], node.level, node.x, node.y)},
-                   threshold);
+        if (child >= 0) consider(node.x, node.y, node.level, child);
       continue;
     }
     const int level = node.level - 1, half = 1 << level;
     for (const auto& [ox, oy] : {std::pair{0, 0}, {half, 0}, {0, half}, {half, half}}) {
       const int x = node.x + ox, y = node.y + oy;
-      if (regionAllows(level, x, y)) consider({x, y, level, node.group, nodeSum(group, level, x, y)}, threshold);
+      if (regionAllows(level, x, y)) consider(x, y, level, node.group);
     }
   }
   return result;
@@ -308,19 +331,47 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
 CorrelativeHit CorrelativeMapSearch::refine(const std::vector<Vec2>& points, const Pose2& pose, double translation,
                                             double rotation) const {
   CorrelativeHit best{pose, score(points, pose)};
+  if (levels_.empty() || points.empty()) return best;
+  std::vector<Vec2> finite;
   double reach = 0.0;
   for (const Vec2& p : points)
-    if (p.allFinite()) reach = std::max(reach, p.norm());
-  const double step = headingStep(reach);
-  const int cells = static_cast<int>(std::ceil(std::max(0.0, translation) / params_.resolution));
+    if (p.allFinite()) {
+      finite.push_back(p);
+      reach = std::max(reach, p.norm());
+    }
+  const double res = params_.resolution, step = headingStep(reach), scale = kScoreScale * static_cast<double>(points.size());
+  const int cells = static_cast<int>(std::ceil(std::max(0.0, translation) / res));
   const int turns = std::min(static_cast<int>(std::ceil(std::max(0.0, rotation) / step)), 10000);
-  for (int t = -turns; t <= turns; ++t)
+  // Per heading each point's cell is found once; the translations step it by whole cells.
+  std::vector<int> cx(finite.size()), cy(finite.size());
+  std::vector<std::ptrdiff_t> offsets(finite.size());
+  for (int t = -turns; t <= turns; ++t) {
+    const double theta = wrapAngle(pose.theta + t * step), c = std::cos(theta), s = std::sin(theta);
+    int lo_x = 0, hi_x = 0, lo_y = 0, hi_y = 0;
+    for (size_t k = 0; k < finite.size(); ++k) {
+      const Vec2& p = finite[k];
+      cx[k] = static_cast<int>(std::floor((pose.x + c * p.x() - s * p.y() - origin_.x()) / res));
+      cy[k] = static_cast<int>(std::floor((pose.y + s * p.x() + c * p.y() - origin_.y()) / res));
+      offsets[k] = static_cast<std::ptrdiff_t>(cy[k]) * width_ + cx[k];
+      lo_x = k == 0 ? cx[k] : std::min(lo_x, cx[k]);
+      hi_x = k == 0 ? cx[k] : std::max(hi_x, cx[k]);
+      lo_y = k == 0 ? cy[k] : std::min(lo_y, cy[k]);
+      hi_y = k == 0 ? cy[k] : std::max(hi_y, cy[k]);
+    }
+    const bool inside = lo_x - cells >= 0 && lo_y - cells >= 0 && hi_x + cells < width_ && hi_y + cells < height_;
     for (int j = -cells; j <= cells; ++j)
       for (int i = -cells; i <= cells; ++i) {
-        const Pose2 candidate(pose.x + i * params_.resolution, pose.y + j * params_.resolution, wrapAngle(pose.theta + t * step));
-        const double s = score(points, candidate);
-        if (s > best.score) best = {candidate, s};
+        int sum = 0;
+        if (inside) {
+          const uint8_t* base = &levels_[0][0] + static_cast<std::ptrdiff_t>(j) * width_ + i;
+          for (const std::ptrdiff_t offset : offsets) sum += base[offset];
+        } else {
+          for (size_t k = 0; k < finite.size(); ++k)
+            if (cx[k] + i >= 0 && cy[k] + j >= 0) sum += cellValue(0, cx[k] + i, cy[k] + j);
+        }
+        if (sum / scale > best.score) best = {Pose2(pose.x + i * res, pose.y + j * res, theta), sum / scale};
       }
+  }
   return best;
 }
 

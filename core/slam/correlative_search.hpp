@@ -70,6 +70,11 @@ class CorrelativeMapSearch {
   CorrelativeHit refine(const std::vector<Vec2>& points, const Pose2& pose, double translation, double rotation) const;
   /// Mean score of `points` (robot frame) with the robot at `pose`.
   double score(const std::vector<Vec2>& points, const Pose2& pose) const;
+  /// The misfit (1 − score) the translation grid alone gives points on a straight wall: the grid
+  /// pose nearest the true one is up to half a cell off across the wall, resolution²/12 squared on
+  /// average, and 1 − exp(−d²/2σ²) ≈ d²/2σ². Scores closer to 1 than a few times this cannot be
+  /// told apart by the search.
+  double gridMisfit() const { return params_.resolution * params_.resolution / (24.0 * params_.sigma * params_.sigma); }
   /// The robot positions searched lie on origin() + resolution · (i, j).
   Vec2 origin() const { return origin_; }
 
@@ -97,8 +102,9 @@ class CorrelativeMapSearch {
   std::vector<HeadingGroup> headingGroups(const std::vector<Vec2>& points, int headings) const;
   int cellValue(int level, int x, int y) const;
   /// Upper bound of the score of every pose in the node (the exact score of a single pose), as the
-  /// sum of the cell values (at most kScoreScale per point).
-  int nodeSum(const HeadingGroup& group, int level, int x, int y) const;
+  /// sum of the cell values (at most kScoreScale per point); once it falls short of a perfect sum by
+  /// more than `max_deficit`, some lower value (the node is pruned either way).
+  int nodeSum(const HeadingGroup& group, int level, int x, int y, int max_deficit) const;
   bool regionAllows(int level, int x, int y) const;
   double headingStep(double reach) const;
   Pose2 poseOf(int heading, int headings, int x, int y) const;

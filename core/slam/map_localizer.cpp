@@ -358,6 +358,10 @@ bool MapLocalizer::foundElsewhere(const LaserScan& scan, const PreparedScan& pre
   // Most doubts end with a cheap first search, which prunes far more: no pose explains the scans
   // that much better, or the best one is where the robot is tracked.
   const double tracked_score = correlative_->refine(points, tracked, kRefineTranslation, kRefineRotation).score;
+  // Where the tracked pose misfits so little that markedly less is below what the search's grid
+  // can tell (the unrefined pose fit less than doubt_max_fit, a pose a few centimetres off fits
+  // them), no place elsewhere can be shown to explain them better.
+  if (1.0 - tracked_score < options_.global_misfit_ratio * correlative_->gridMisfit()) return false;
   const double better_score = 1.0 - (1.0 - tracked_score) / options_.global_misfit_ratio;
   const CorrelativeQuery best_only{std::max(options_.global_min_score, better_score), 0.0,
                                    options_.global_ambiguity_distance, params_.loop_ambiguity_heading};

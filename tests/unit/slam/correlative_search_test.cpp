@@ -117,6 +117,29 @@ TEST(CorrelativeMapSearch, RefinePlacesAScanFromAPoseNearBy) {
   EXPECT_EQ(stay.score, search.score(points, off)) << "a zero window scores the pose itself";
 }
 
+// refine steps each point's cell by whole cells per heading: it must find what scoring every pose
+// of its window finds, near the grid's edge (where points fall off it) as well as inside.
+TEST(CorrelativeMapSearch, RefineFindsTheBestScoreOfItsWindowAsScoringEveryPoseDoes) {
+  const LoopMap loop;
+  const CorrelativeMapSearch search(loop.points, loop.positions, CorrelativeSearchParams{});
+  const double translation = 0.2, rotation = deg2rad(3.0), res = CorrelativeSearchParams{}.resolution;
+  const std::vector<Vec2> points = scanPoints(Pose2(-2.0, -3.0, 0.1), 98);
+  double reach = 0.0;
+  for (const Vec2& p : points) reach = std::max(reach, p.norm());
+  const double step = std::acos(1.0 - res * res / (2.0 * reach * reach));
+  const int cells = static_cast<int>(std::ceil(translation / res)), turns = static_cast<int>(std::ceil(rotation / step));
+  for (const Pose2& from : {Pose2(-1.87, -3.13, 0.17), Pose2(search.origin().x() + 0.03, -3.0, 0.4)}) {
+    double best = search.score(points, from);
+    for (int t = -turns; t <= turns; ++t)
+      for (int j = -cells; j <= cells; ++j)
+        for (int i = -cells; i <= cells; ++i)
+          best = std::max(best, search.score(points, Pose2(from.x + i * res, from.y + j * res, wrapAngle(from.theta + t * step))));
+    const CorrelativeHit refined = search.refine(points, from, translation, rotation);
+    EXPECT_NEAR(refined.score, best, 1e-12) << "from " << from.x << ", " << from.y;
+    EXPECT_NEAR(search.score(points, refined.pose), refined.score, 1e-12) << "the pose returned has the score returned";
+  }
+}
+
 TEST(CorrelativeMapSearch, ASymmetricMapGivesEveryLookAlikePlace) {
   // A square room: a scan of it fits at four headings.
   const std::vector<Vec2> map = pointsOf({{{0, 0}, {4, 0}}, {{4, 0}, {4, 4}}, {{4, 4}, {0, 4}}, {{0, 4}, {0, 0}}}, 0.05);
