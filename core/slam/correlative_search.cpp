@@ -276,12 +276,15 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
     while (deficit < perfect && score_of(perfect - deficit - 1) >= threshold) ++deficit;
     return deficit;
   };
-  double threshold = query.min_score;
+  double threshold = std::max(query.min_score, query.best_at_least);
   int max_deficit = allowed_deficit(threshold);
+  bool setting_aside = threshold > query.min_score;
+  std::vector<Node> set_aside;  // scored below best_at_least before any place was found
   const auto consider = [&](int x, int y, int level, int group) {
     ++result.scored_nodes;
     const int sum = nodeSum(groups[static_cast<size_t>(group)], level, x, y, max_deficit);
     if (score_of(sum) >= threshold) open.push(sum, {x, y, level, group, sum});
+    else if (setting_aside) set_aside.push_back({x, y, level, group, 0});
   };
   const int root_level = groups[roots_begin].level;
   for (size_t g = roots_begin; g < groups.size() && groups[g].level == root_level; ++g)
@@ -309,8 +312,15 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
     if (within_a_place(node, group)) continue;
     if (node.level == 0 && group.level == 0) {
       result.places.push_back({poseOf(group.first, headings, node.x, node.y), score_of(node.sum)});
-      threshold = std::max(threshold, result.places.front().score - query.rival_margin);
+      if (result.places.size() == 1 && query.want_rivals && !query.want_rivals(result.places.front())) break;
+      const double rivals_from = result.places.front().score - query.rival_margin;
+      threshold = setting_aside ? std::max(query.min_score, rivals_from) : std::max(threshold, rivals_from);
       max_deficit = allowed_deficit(threshold);
+      if (setting_aside) {
+        setting_aside = false;
+        for (const Node& aside : set_aside) consider(aside.x, aside.y, aside.level, aside.group);
+        set_aside = {};
+      }
       continue;
     }
     // Branch on what loosens the bound more: the headings' spread or the translations'.

@@ -23,6 +23,7 @@
 //   CorrelativeSearchResult r = search.find(points_in_robot_frame, query);
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -37,16 +38,23 @@ struct CorrelativeSearchParams {
   int levels = 8;              ///< precomputed grids; the coarsest node spans 2^(levels-1) cells
 };
 
+struct CorrelativeHit {
+  Pose2 pose;
+  double score = 0.0;
+};
+
 struct CorrelativeQuery {
   double min_score = 0.5;      ///< mean per-point score a pose needs (0..1)
   double rival_margin = 0.05;  ///< a rival scores at least best − this
   double rival_distance = 0.5;     ///< m
   double rival_heading = 0.5;      ///< rad
-};
-
-struct CorrelativeHit {
-  Pose2 pose;
-  double score = 0.0;
+  /// The best place must score at least this (when above min_score): until a pose does, nodes below
+  /// it are set aside rather than expanded, and taken up again, for the places within rival_margin
+  /// of the best, only once one does. A search that finds nothing costs what a search from this
+  /// score does; one that finds a place costs about what a search from the rivals' score does.
+  double best_at_least = 0.0;
+  /// Asked once the best place is found: false ends the search with it alone (no rivals wanted).
+  std::function<bool(const CorrelativeHit& best)> want_rivals;
 };
 
 struct CorrelativeSearchResult {

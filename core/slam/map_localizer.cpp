@@ -292,15 +292,25 @@ double MapLocalizer::seeThroughLimit(const LaserScan& raw, const Pose2& current)
                   0.5 * field_->seeThrough(raw, current, options_.global_see_through_clearance));
 }
 
+CorrelativeQuery MapLocalizer::globalQuery() const {
+  return {.min_score = options_.global_min_score,
+          .rival_margin = options_.global_score_margin,
+          .rival_distance = options_.global_ambiguity_distance,
+          .rival_heading = params_.loop_ambiguity_heading,
+          .best_at_least = 0.0,
+          .want_rivals = {}};
+}
+
 std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& raw, const PreparedScan& scan,
-                                                              const std::vector<Vec2>& points, const Pose2& current,
-                                                              double best_score) {
-  ++stats_.global_searches;
-  const CorrelativeQuery query{std::max(options_.global_min_score, best_score - options_.global_score_margin),
-                               options_.global_score_margin, options_.global_ambiguity_distance,
-                               params_.loop_ambiguity_heading};
-  const CorrelativeSearchResult found = correlative_->find(points, query);
+                                                              const std::vector<Vec2>& points, const Pose2& current) {
+  const CorrelativeSearchResult found = correlative_->find(points, globalQuery());
   stats_.global_nodes += found.scored_nodes;
+  return placeAmong(raw, scan, found, current);
+}
+
+std::optional<MapLocalizer::Fix> MapLocalizer::placeAmong(const LaserScan& raw, const PreparedScan& scan,
+                                                          const CorrelativeSearchResult& found, const Pose2& current) {
+  ++stats_.global_searches;
   // The places the scans fit about equally well: a place whose rays would pass through mapped walls
   // is not where the robot is (a corridor seen the wrong way round, a look-alike). Where the
   // robot is thought to be now sees through walls too, the map there is not one clean copy (a
@@ -355,24 +365,24 @@ bool MapLocalizer::foundElsewhere(const LaserScan& scan, const PreparedScan& pre
   // The place must explain the scans markedly better than the tracked pose does, as a rival must;
   // the best pose within the refinement window around it stands for it (a tracked pose a few
   // centimetres off, or scans bent a little by odometry, are no evidence of being elsewhere).
-  // Most doubts end with a cheap first search, which prunes far more: no pose explains the scans
-  // that much better, or the best one is where the robot is tracked.
+  // Most doubts end with the search's first part, which prunes far more: no pose explains the
+  // scans that much better, or the best one is where the robot is tracked (and sees through no
+  // more walls than it); only otherwise does it go on to the rivals within the margin of the best.
   const double tracked_score = correlative_->refine(points, tracked, kRefineTranslation, kRefineRotation).score;
   // Where the tracked pose misfits so little that markedly less is below what the search's grid
   // can tell (the unrefined pose fit less than doubt_max_fit, a pose a few centimetres off fits
   // them), no place elsewhere can be shown to explain them better.
   if (1.0 - tracked_score < options_.global_misfit_ratio * correlative_->gridMisfit()) return false;
-  const double better_score = 1.0 - (1.0 - tracked_score) / options_.global_misfit_ratio;
-  const CorrelativeQuery best_only{std::max(options_.global_min_score, better_score), 0.0,
-                                   options_.global_ambiguity_distance, params_.loop_ambiguity_heading};
-  const CorrelativeSearchResult best = correlative_->find(points, best_only);
-  stats_.global_nodes += best.scored_nodes;
-  if (best.places.empty()) return false;
-  const Pose2 best_pose = best.places.front().pose;
-  if (isNear(best_pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading) &&
-      field_->seeThrough(scan, best_pose, options_.global_see_through_clearance) <= seeThroughLimit(scan, tracked))
-    return false;
-  const std::optional<Fix> place = searchGlobally(scan, prepared, points, tracked, best.places.front().score);
+  CorrelativeQuery query = globalQuery();
+  query.best_at_least = 1.0 - (1.0 - tracked_score) / options_.global_misfit_ratio;
+  query.want_rivals = [&](const CorrelativeHit& best) {
+    return !isNear(best.pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading) ||
+           field_->seeThrough(scan, best.pose, options_.global_see_through_clearance) > seeThroughLimit(scan, tracked);
+  };
+  const CorrelativeSearchResult found = correlative_->find(points, query);
+  stats_.global_nodes += found.scored_nodes;
+  if (found.places.empty() || !query.want_rivals(found.places.front())) return false;
+  const std::optional<Fix> place = placeAmong(scan, prepared, found, tracked);
   if (!place || isNear(place->pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading))
     return false;
   return 1.0 - tracked_score > options_.global_misfit_ratio * (1.0 - place->score);

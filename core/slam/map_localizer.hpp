@@ -188,10 +188,14 @@ class MapLocalizer {
                              const Pose2& mount);
   bool withinGate(const Vec3& innovation, const Mat3& innovation_cov) const;
   /// Global search: the unambiguous best hit of `points` (robot frame, `raw` the current scan), if
-  /// any; `current` is where the robot is thought to be now (tracked, or dead reckoning). A known
-  /// `best_score` of the points (a search done already) spares scoring what cannot rival it.
+  /// any; `current` is where the robot is thought to be now (tracked, or dead reckoning).
   std::optional<Fix> searchGlobally(const LaserScan& raw, const PreparedScan& scan, const std::vector<Vec2>& points,
-                                    const Pose2& current, double best_score = 0.0);
+                                    const Pose2& current);
+  /// The global search's query: places from global_min_score, rivals within global_score_margin.
+  CorrelativeQuery globalQuery() const;
+  /// The unambiguous best of the places a search `found`, refined and checked, if any.
+  std::optional<Fix> placeAmong(const LaserScan& raw, const PreparedScan& scan, const CorrelativeSearchResult& found,
+                                const Pose2& current);
   /// The fraction of `raw`'s rays a place may send through mapped walls: global_max_see_through, or
   /// half of what `current` sends through if more.
   double seeThroughLimit(const LaserScan& raw, const Pose2& current) const;

@@ -73,7 +73,7 @@ TEST(CorrelativeMapSearch, FindsTheSamePoseAsScoringEveryPose) {
   const Pose2 truth(3.03, 1.12, 0.4);
   std::vector<Vec2> points;
   for (size_t i = 0; i < map.size(); i += 3) points.push_back(truth.inverseTransform(map[i]));
-  const CorrelativeQuery query{0.3, 0.0, 0.5, 0.5};
+  const CorrelativeQuery query{.min_score = 0.3, .rival_margin = 0.0, .rival_distance = 0.5, .rival_heading = 0.5, .best_at_least = 0.0, .want_rivals = {}};
   const CorrelativeSearchResult found = search.find(points, query);
   ASSERT_FALSE(found.places.empty());
 
@@ -161,7 +161,7 @@ TEST(CorrelativeMapSearch, ReportsEveryPlaceWithinTheMarginAsScoringEveryPoseDoe
   const Pose2 truth(2.4, 1.6, 0.2);
   std::vector<Vec2> points;
   for (size_t i = 0; i < map.size(); i += 4) points.push_back(truth.inverseTransform(map[i]));
-  const CorrelativeQuery query{0.3, 0.15, 0.4, 0.4};
+  const CorrelativeQuery query{.min_score = 0.3, .rival_margin = 0.15, .rival_distance = 0.4, .rival_heading = 0.4, .best_at_least = 0.0, .want_rivals = {}};
   const CorrelativeSearchResult found = search.find(points, query);
   ASSERT_FALSE(found.places.empty());
   const double floor = found.places.front().score - query.rival_margin;
@@ -182,6 +182,38 @@ TEST(CorrelativeMapSearch, ReportsEveryPlaceWithinTheMarginAsScoringEveryPoseDoe
     EXPECT_GE(found.places[a].score, floor);
     for (size_t b = 0; b < a; ++b) EXPECT_FALSE(isNear(found.places[a].pose, found.places[b].pose, query.rival_distance, query.rival_heading));
   }
+}
+
+// A search that needs its best place to score best_at_least sets lower nodes aside and takes them
+// up again once it has one: the same places as a search from min_score; none if no pose scores
+// that much; the best alone when no rivals are wanted.
+TEST(CorrelativeMapSearch, ABestPlaceThresholdFindsTheSamePlacesOrNone) {
+  const std::vector<Vec2> map =
+      pointsOf({{{0, 0}, {5, 0}}, {{5, 0}, {5, 3}}, {{5, 3}, {0, 3}}, {{0, 3}, {0, 1.8}}, {{0, 1.2}, {0, 0}}}, 0.05);
+  const CorrelativeMapSearch search(map, {{2.5, 1.5}}, CorrelativeSearchParams{0.1, 0.1, 0.8, 4});
+  const Pose2 truth(2.4, 1.6, 0.2);
+  std::vector<Vec2> points;
+  for (size_t i = 0; i < map.size(); i += 4) points.push_back(truth.inverseTransform(map[i]));
+  CorrelativeQuery query{.min_score = 0.3, .rival_margin = 0.15, .rival_distance = 0.4, .rival_heading = 0.4, .best_at_least = 0.0, .want_rivals = {}};
+  const CorrelativeSearchResult all = search.find(points, query);
+  ASSERT_GE(all.places.size(), 2u);
+  const double best = all.places.front().score;
+
+  query.best_at_least = best - 0.01;
+  const CorrelativeSearchResult from_best = search.find(points, query);
+  ASSERT_EQ(from_best.places.size(), all.places.size());
+  for (size_t i = 0; i < all.places.size(); ++i) {
+    EXPECT_NEAR(from_best.places[i].score, all.places[i].score, 1e-12);
+    EXPECT_TRUE(isNear(from_best.places[i].pose, all.places[i].pose, query.rival_distance, query.rival_heading));
+  }
+  query.best_at_least = best + 0.01;
+  EXPECT_TRUE(search.find(points, query).places.empty()) << "no pose scores more than the best";
+  query.best_at_least = 0.0;
+  query.want_rivals = [](const CorrelativeHit&) { return false; };
+  const CorrelativeSearchResult alone = search.find(points, query);
+  ASSERT_EQ(alone.places.size(), 1u);
+  EXPECT_NEAR(alone.places.front().score, best, 1e-12);
+  EXPECT_LT(alone.scored_nodes, all.scored_nodes);
 }
 
 TEST(CorrelativeMapSearch, NothingToSearchFindsNothing) {
