@@ -313,8 +313,7 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
     if (node.level == 0 && group.level == 0) {
       result.places.push_back({poseOf(group.first, headings, node.x, node.y), score_of(node.sum)});
       if (result.places.size() == 1 && query.want_rivals && !query.want_rivals(result.places.front())) break;
-      const double rivals_from = result.places.front().score - query.rival_margin;
-      threshold = setting_aside ? std::max(query.min_score, rivals_from) : std::max(threshold, rivals_from);
+      threshold = std::max(query.min_score, result.places.front().score - query.rival_margin);
       max_deficit = allowed_deficit(threshold);
       if (setting_aside) {
         setting_aside = false;
@@ -341,7 +340,6 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
 CorrelativeHit CorrelativeMapSearch::refine(const std::vector<Vec2>& points, const Pose2& pose, double translation,
                                             double rotation) const {
   CorrelativeHit best{pose, score(points, pose)};
-  if (levels_.empty() || points.empty()) return best;
   std::vector<Vec2> finite;
   double reach = 0.0;
   for (const Vec2& p : points)
@@ -349,6 +347,7 @@ CorrelativeHit CorrelativeMapSearch::refine(const std::vector<Vec2>& points, con
       finite.push_back(p);
       reach = std::max(reach, p.norm());
     }
+  if (levels_.empty() || finite.empty()) return best;
   const double res = params_.resolution, step = headingStep(reach), scale = kScoreScale * static_cast<double>(points.size());
   const int cells = static_cast<int>(std::ceil(std::max(0.0, translation) / res));
   const int turns = std::min(static_cast<int>(std::ceil(std::max(0.0, rotation) / step)), 10000);
@@ -357,18 +356,15 @@ CorrelativeHit CorrelativeMapSearch::refine(const std::vector<Vec2>& points, con
   std::vector<std::ptrdiff_t> offsets(finite.size());
   for (int t = -turns; t <= turns; ++t) {
     const double theta = wrapAngle(pose.theta + t * step), c = std::cos(theta), s = std::sin(theta);
-    int lo_x = 0, hi_x = 0, lo_y = 0, hi_y = 0;
     for (size_t k = 0; k < finite.size(); ++k) {
       const Vec2& p = finite[k];
       cx[k] = static_cast<int>(std::floor((pose.x + c * p.x() - s * p.y() - origin_.x()) / res));
       cy[k] = static_cast<int>(std::floor((pose.y + s * p.x() + c * p.y() - origin_.y()) / res));
       offsets[k] = static_cast<std::ptrdiff_t>(cy[k]) * width_ + cx[k];
-      lo_x = k == 0 ? cx[k] : std::min(lo_x, cx[k]);
-      hi_x = k == 0 ? cx[k] : std::max(hi_x, cx[k]);
-      lo_y = k == 0 ? cy[k] : std::min(lo_y, cy[k]);
-      hi_y = k == 0 ? cy[k] : std::max(hi_y, cy[k]);
     }
-    const bool inside = lo_x - cells >= 0 && lo_y - cells >= 0 && hi_x + cells < width_ && hi_y + cells < height_;
+    const auto [lo_x, hi_x] = std::minmax_element(cx.begin(), cx.end());
+    const auto [lo_y, hi_y] = std::minmax_element(cy.begin(), cy.end());
+    const bool inside = *lo_x - cells >= 0 && *lo_y - cells >= 0 && *hi_x + cells < width_ && *hi_y + cells < height_;
     for (int j = -cells; j <= cells; ++j)
       for (int i = -cells; i <= cells; ++i) {
         int sum = 0;
@@ -376,8 +372,7 @@ CorrelativeHit CorrelativeMapSearch::refine(const std::vector<Vec2>& points, con
           const uint8_t* base = &levels_[0][0] + static_cast<std::ptrdiff_t>(j) * width_ + i;
           for (const std::ptrdiff_t offset : offsets) sum += base[offset];
         } else {
-          for (size_t k = 0; k < finite.size(); ++k)
-            if (cx[k] + i >= 0 && cy[k] + j >= 0) sum += cellValue(0, cx[k] + i, cy[k] + j);
+          for (size_t k = 0; k < finite.size(); ++k) sum += cellValue(0, cx[k] + i, cy[k] + j);
         }
         if (sum / scale > best.score) best = {Pose2(pose.x + i * res, pose.y + j * res, theta), sum / scale};
       }

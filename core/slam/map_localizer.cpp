@@ -375,13 +375,16 @@ bool MapLocalizer::foundElsewhere(const LaserScan& scan, const PreparedScan& pre
   if (1.0 - tracked_score < options_.global_misfit_ratio * correlative_->gridMisfit()) return false;
   CorrelativeQuery query = globalQuery();
   query.best_at_least = 1.0 - (1.0 - tracked_score) / options_.global_misfit_ratio;
+  bool rivals_wanted = false;
   query.want_rivals = [&](const CorrelativeHit& best) {
-    return !isNear(best.pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading) ||
-           field_->seeThrough(scan, best.pose, options_.global_see_through_clearance) > seeThroughLimit(scan, tracked);
+    rivals_wanted =
+        !isNear(best.pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading) ||
+        field_->seeThrough(scan, best.pose, options_.global_see_through_clearance) > seeThroughLimit(scan, tracked);
+    return rivals_wanted;
   };
   const CorrelativeSearchResult found = correlative_->find(points, query);
   stats_.global_nodes += found.scored_nodes;
-  if (found.places.empty() || !query.want_rivals(found.places.front())) return false;
+  if (!rivals_wanted) return false;  // no place, or the best is where the robot is tracked
   const std::optional<Fix> place = placeAmong(scan, prepared, found, tracked);
   if (!place || isNear(place->pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading))
     return false;
