@@ -595,8 +595,12 @@ void PsmSlam::syncGraphFromFilter() {
   // Keyframes still in the filter take its (loop-corrected) estimate; the ones marginalised
   // earlier move rigidly with the filter keyframe before them, so that the optimiser starts
   // from a consistent guess instead of a map torn at every marginalised keyframe.
+  // The first node defines the frame and stays where it is. A filter resumed from a snapshot
+  // holds it only as uncertain as the robot sees it, so a loop closure to it would otherwise move
+  // the whole map by the robot's drift instead of moving the robot.
   Pose2 correction;  // new ⊕ ⊖old of the latest filter keyframe passed
   for (const PoseGraphNode& node : std::vector<PoseGraphNode>(graph_.nodes())) {
+    if (node.id == 0) continue;
     if (map_frozen_ && node.id < map_keyframes_) continue;  // where the map has it
     if (filter_.hasKeyframe(node.id)) {
       const Pose2 updated = filter_.keyframePose(node.id);
