@@ -238,7 +238,8 @@ SimulatedFigures simulatedPairsExperiments(const Options& o) {
               pass(f.far["PSM"].success >= 0.95), 100 * f.far["PSM"].success);
 
   std::printf("\n== 4. Time per 181-beam match (wall clock per match, median; scans prepared beforehand) ==\n");
-  std::printf("   goal: PSM median ≤ 20 us on one core (the original C code: about 80 us)\n");
+  std::printf("   goals: PSM median ≤ 20 us on one core (the original C code: about 80 us); with the scan's preparation "
+              "included ≤ 12 us (issue 19)\n");
   std::printf("   %-13s %12s %12s %12s\n", "method", "guess 0.1/5", "0.3 m/20°", "0.5 m/30°");
   for (const Method& m : all)
     std::printf("   %-13s %10.1f us %10.1f us %10.1f us\n", m.name.c_str(), median(f.accuracy[m.name].time_us),
@@ -255,7 +256,9 @@ SimulatedFigures simulatedPairsExperiments(const Options& o) {
     prepare.push_back(microsSince(start));
   }
   std::printf("   scan preparation (once per scan): %.1f us median\n", median(prepare));
-  std::printf("   PSM: %s (%.1f us)\n", pass(median(f.accuracy["PSM"].time_us) <= 20.0), median(f.accuracy["PSM"].time_us));
+  const double psm_us = median(f.accuracy["PSM"].time_us), prepared_us = psm_us + median(prepare);
+  std::printf("   PSM: %s (%.1f us); with preparation: %s (%.1f us)\n", pass(psm_us <= 20.0), psm_us,
+              pass(prepared_us <= 12.0), prepared_us);
   return f;
 }
 
