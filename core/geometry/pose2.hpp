@@ -1,6 +1,7 @@
 #pragma once
 // SE(2) poses and angle helpers. Frames are right-handed, x forward, y left (REP-103).
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -54,6 +55,16 @@ struct Pose2 {
     return {c * dx + s * dy, -s * dx + c * dy};
   }
 };
+
+inline bool finitePose(const Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
+
+/// Distance from p to the segment a–b; `s_out` receives where the closest point lies (0 at a, 1 at b).
+inline double distanceToSegment(const Vec2& p, const Vec2& a, const Vec2& b, double* s_out = nullptr) {
+  const Vec2 e = b - a;
+  const double s = e.squaredNorm() > 0.0 ? std::clamp((p - a).dot(e) / e.squaredNorm(), 0.0, 1.0) : 0.0;
+  if (s_out) *s_out = s;
+  return (a + s * e - p).norm();
+}
 
 /// Relative pose of b seen from a: (⊖a) ⊕ b.
 inline Pose2 between(const Pose2& a, const Pose2& b) { return a.inverse() * b; }

@@ -52,7 +52,7 @@ class GroupFileParser {
   GroupSpec parse() {
     const std::string stem = std::filesystem::path(f_.path()).stem().string();
     GroupSpec root = parseGroup(f_.root(), Defaults{}, "", stem);
-    checkUniqueNames(root);
+    checkNames(root);
     return root;
   }
 
@@ -104,7 +104,7 @@ class GroupFileParser {
     const std::string what = "command in " + group_path;
     f_.requireMap(node, what,
                   {"name", "exec", "command", "args", "environment", "working_dir", "host", "auto_respawn",
-                   "stop_signal", "stop_grace", "respawn_backoff", "start_order", "start_delay", "required"});
+                   "stop_signal", "stop_grace", "respawn_backoff", "start_order", "start_delay", "wait_for", "wait_timeout", "required"});
     CommandSpec cmd;
     cmd.name = name(node, what);
     if (cmd.name == "launch" || cmd.name == "launcher")
@@ -123,9 +123,22 @@ class GroupFileParser {
     cmd.backoff = d.backoff;
     cmd.start_order = f_.integer(node, "start_order", ctx, 0, -1000, 1000);
     cmd.start_delay_s = f_.number(node, "start_delay", ctx, 0.0, 0.0, 3600.0);
+    cmd.wait_for = names(node["wait_for"], ctx + ".wait_for");
+    cmd.wait_timeout_s = f_.number(node, "wait_timeout", ctx, cmd.wait_timeout_s, 0.0, 3600.0);
     cmd.required = f_.boolean(node, "required", ctx, false);
     cmd.argv = argv(node, ctx, varsWith(cmd.environment));
     return cmd;
+  }
+
+  std::vector<std::string> names(const YAML::Node& node, const std::string& ctx) const {
+    if (!node) return {};
+    f_.requireSequence(node, ctx);
+    std::vector<std::string> out;
+    for (const auto& item : node) {
+      if (!item.IsScalar() || item.Scalar().empty()) f_.fail(item, ctx + ": expected command names");
+      out.push_back(item.Scalar());
+    }
+    return out;
   }
 
   std::vector<std::string> argv(const YAML::Node& node, const std::string& ctx, const Environment& vars) const {
@@ -186,10 +199,11 @@ class GroupFileParser {
     return vars;
   }
 
-  void checkUniqueNames(const GroupSpec& root) const {
+  void checkNames(const GroupSpec& root) const {
     std::map<std::string, std::string> commands;
     std::set<std::string> groups;
     checkUniqueNames(root, commands, groups);
+    checkAwaitedNames(root, commands);
   }
 
   void checkUniqueNames(const GroupSpec& group, std::map<std::string, std::string>& commands,
@@ -201,6 +215,16 @@ class GroupFileParser {
       if (!fresh) throw std::runtime_error(cmd.where + ": command name '" + cmd.name + "' already used at " + it->second);
     }
     for (const auto& sub : group.groups) checkUniqueNames(sub, commands, groups);
+  }
+
+  void checkAwaitedNames(const GroupSpec& group, const std::map<std::string, std::string>& commands) const {
+    for (const auto& cmd : group.commands)
+      for (const auto& name : cmd.wait_for) {
+        if (name == cmd.name) throw std::runtime_error(cmd.where + ": '" + cmd.name + "' waits for itself (wait_for)");
+        if (!commands.count(name))
+          throw std::runtime_error(cmd.where + ": wait_for names '" + name + "', which is not a command of this file");
+      }
+    for (const auto& sub : group.groups) checkAwaitedNames(sub, commands);
   }
 
   YamlFields f_;

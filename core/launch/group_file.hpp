@@ -35,6 +35,10 @@ struct CommandSpec {
   double stop_grace_s = 3.0;        // time between stop_signal and SIGKILL
   int start_order = 0;              // lower starts first; ties keep file order
   double start_delay_s = 0.0;       // wait after the previous command's start
+  // The first start also waits until these commands have reported PROCESS_STATUS "running" (they
+  // have subscribed: nothing they are to receive is lost), for wait_timeout_s at most.
+  std::vector<std::string> wait_for;
+  double wait_timeout_s = 30.0;
   bool required = false;            // when it ends for good, everything stops (e.g. a log player)
   RestartBackoff backoff;
   std::string where;                // "FILE:LINE" of its definition

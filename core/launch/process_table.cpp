@@ -54,25 +54,47 @@ std::optional<size_t> ProcessTable::indexOfPid(int pid) const {
   return std::nullopt;
 }
 
+bool ProcessTable::waiting(size_t i, LaunchClock::time_point now) const {
+  const ProcessRecord& r = records_[i];
+  return r.state == RunState::Scheduled && now < r.next_start + seconds(r.spec.wait_timeout_s) && !awaited(i).empty();
+}
+
 std::vector<size_t> ProcessTable::dueToStart(LaunchClock::time_point now) const {
   std::vector<size_t> due;
   for (size_t i = 0; i < records_.size(); ++i)
-    if (isPending(records_[i].state) && records_[i].next_start <= now) due.push_back(i);
+    if (isPending(records_[i].state) && records_[i].next_start <= now && !waiting(i, now)) due.push_back(i);
   return due;
 }
 
-std::optional<LaunchClock::time_point> ProcessTable::nextStart() const {
+std::optional<LaunchClock::time_point> ProcessTable::nextStart(LaunchClock::time_point now) const {
   std::optional<LaunchClock::time_point> earliest;
-  for (const auto& r : records_)
-    if (isPending(r.state) && (!earliest || r.next_start < *earliest)) earliest = r.next_start;
+  for (size_t i = 0; i < records_.size(); ++i) {
+    const ProcessRecord& r = records_[i];
+    if (!isPending(r.state)) continue;
+    // Past its delay and waiting for reports: the next time is its timeout (a report wakes the launcher).
+    const auto at = r.next_start <= now && waiting(i, now) ? r.next_start + seconds(r.spec.wait_timeout_s) : r.next_start;
+    if (!earliest || at < *earliest) earliest = at;
+  }
   return earliest;
 }
+
+std::vector<std::string> ProcessTable::awaited(size_t i) const {
+  std::vector<std::string> names;
+  for (const std::string& name : records_[i].spec.wait_for)
+    for (const ProcessRecord& r : records_)
+      if (r.spec.name == name && !r.reported_running && (r.state == RunState::Running || isPending(r.state)))
+        names.push_back(name);
+  return names;
+}
+
+void ProcessTable::reportedRunning(size_t i) { records_[i].reported_running = true; }
 
 void ProcessTable::started(size_t i, int pid, LaunchClock::time_point now) {
   ProcessRecord& r = records_[i];
   if (r.state == RunState::Restarting) ++r.restarts;
   r.state = RunState::Running;
   r.pid = pid;
+  r.reported_running = false;
   r.started_at = now;
   r.cpu_percent = r.rss_mb = 0.0;
 }
@@ -88,6 +110,7 @@ RunState ProcessTable::exited(size_t i, ExitStatus status, LaunchClock::time_poi
   ProcessRecord& r = records_[i];
   const bool stop_requested = r.state == RunState::Stopping;
   r.pid = -1;
+  r.reported_running = false;
   r.last_exit = status.describe();
   r.cpu_percent = r.rss_mb = 0.0;
   if (stop_requested || status.clean()) {

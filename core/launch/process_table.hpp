@@ -47,6 +47,7 @@ struct ProcessRecord {
   LaunchClock::time_point kill_deadline{};  // Stopping
   std::string last_exit;                    // ExitStatus::describe() of the latest end
   std::string error;                        // why it Failed
+  bool reported_running = false;            // its program said PROCESS_STATUS "running" since its start
   double cpu_percent = 0.0;
   double rss_mb = 0.0;
 };
@@ -61,10 +62,16 @@ class ProcessTable {
   size_t size() const { return records_.size(); }
   std::optional<size_t> indexOfPid(int pid) const;
 
-  /// Commands whose (re)start is due at `now`.
+  /// Commands whose (re)start is due at `now`: start_delay passed, and for a first start, every
+  /// command of its wait_for reported running (or wait_timeout passed).
   std::vector<size_t> dueToStart(LaunchClock::time_point now) const;
-  /// The earliest pending (re)start, if any.
-  std::optional<LaunchClock::time_point> nextStart() const;
+  /// The earliest time a pending (re)start may become due, if any.
+  std::optional<LaunchClock::time_point> nextStart(LaunchClock::time_point now) const;
+  /// The commands of i's wait_for that have not yet reported running and still may (running or
+  /// about to start). Commands not selected here (another host) are not waited for.
+  std::vector<std::string> awaited(size_t i) const;
+  /// The program of running command i reported PROCESS_STATUS "running": it is ready for input.
+  void reportedRunning(size_t i);
 
   void started(size_t i, int pid, LaunchClock::time_point now);
   void startFailed(size_t i, const std::string& error);
@@ -87,6 +94,9 @@ class ProcessTable {
   bool anyFailed() const;
 
  private:
+  /// A first start held back by wait_for at `now`.
+  bool waiting(size_t i, LaunchClock::time_point now) const;
+
   std::vector<ProcessRecord> records_;
   bool shutting_down_ = false;
 };

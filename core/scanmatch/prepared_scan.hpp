@@ -4,6 +4,7 @@
 // points, and the masked arrays the orientation search reads. Matching never allocates per
 // scan pair: everything that depends on one scan alone is here.
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -15,6 +16,8 @@ namespace polarslam {
 
 /// Lanes of the vectorised projection (SSE: four floats).
 inline constexpr size_t kSimdWidth = 4;
+/// A bearing without a reading, in float range arrays.
+inline constexpr float kInfF = std::numeric_limits<float>::infinity();
 
 /// Reading flags (§3.2). Only kFlagRange is set on prepared scans; projection adds the others.
 enum : uint8_t {

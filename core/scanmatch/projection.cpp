@@ -15,7 +15,6 @@ using Floats = float __attribute__((vector_size(16)));
 using Ints = int32_t __attribute__((vector_size(16)));
 static_assert(sizeof(Floats) == kSimdWidth * sizeof(float));
 
-constexpr float kInfF = std::numeric_limits<float>::infinity();
 /// A projected reading within this many beams of a reference bearing counts as on it; covers
 /// the single-precision bearing (≈ 3e-7 rad). The straight line is extended by at most this.
 constexpr float kIndexSnap = 1e-3f;

@@ -11,7 +11,6 @@ namespace polarslam {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr float kInfF = std::numeric_limits<float>::infinity();
 /// §7: the translation normal matrix is singular below this (dimensionless) determinant.
 constexpr double kMinDeterminant = 1e-3;
 /// §8: parabolic refinement only when the curvature exceeds 0.01 cm.
@@ -99,7 +98,6 @@ struct ObservableSpace {
   }
 };
 
-bool finitePose(const Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
 
 }  // namespace
 

@@ -9,12 +9,6 @@ namespace {
 
 constexpr size_t kSegmentSearchWindow = 3;  // segments ahead considered when tracking progress
 
-double distanceToSegment(const Vec2& p, const Vec2& a, const Vec2& b) {
-  const Vec2 e = b - a;
-  const double s = std::clamp((p - a).dot(e) / e.squaredNorm(), 0.0, 1.0);
-  return (a + s * e - p).norm();
-}
-
 }  // namespace
 
 PathFollower::PathFollower(const DriveConfig& robot) : robot_(robot) {}

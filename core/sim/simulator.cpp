@@ -28,15 +28,15 @@ Pose2 startPose(const World& world) {
   return {wp[0].x(), wp[0].y(), heading};
 }
 
-/// Periodic events of one sensor, in µs since the start.
-struct Schedule {
-  int64_t next_us = 0;
-  int64_t period_us = 1;
-};
-
 }  // namespace
 
 struct Simulator::Impl {
+  /// Periodic events of one sensor, in µs since the start.
+  struct Schedule {
+    int64_t next_us = 0;
+    int64_t period_us = 1;
+  };
+
   Impl(World w, RobotDescription c, uint64_t seed)
       : world(std::move(w)),
         config(std::move(c)),

@@ -16,13 +16,6 @@ constexpr int kMaxGridCellsPerSide = 256;
 
 double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
-double distanceToSegment(const Vec2& p, const Vec2& a, const Vec2& b, double* s_out = nullptr) {
-  const Vec2 e = b - a;
-  const double s = std::clamp((p - a).dot(e) / e.squaredNorm(), 0.0, 1.0);
-  if (s_out) *s_out = s;
-  return (a + s * e - p).norm();
-}
-
 /// Does segment a–b touch the axis-aligned box [lo, hi]? (separating-axis test)
 bool segmentTouchesBox(const Vec2& a, const Vec2& b, const Vec2& lo, const Vec2& hi) {
   if (std::max(a.x(), b.x()) < lo.x() || std::min(a.x(), b.x()) > hi.x()) return false;

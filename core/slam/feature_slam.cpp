@@ -18,7 +18,6 @@ constexpr int64_t kNever = std::numeric_limits<int64_t>::max();
 
 int64_t micros(double seconds) { return static_cast<int64_t>(std::llround(seconds * 1e6)); }
 
-bool finitePose(const Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
 
 /// Finite, symmetric and positive definite (top-left n × n block).
 bool usableCovariance(const Mat3& cov, int n) {

@@ -14,7 +14,6 @@
 namespace polarslam {
 namespace {
 
-bool finitePose(const Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
 
 /// Wraps into [−π, π) with operations that also work on Ceres jets.
 template <typename T>

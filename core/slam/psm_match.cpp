@@ -6,8 +6,6 @@
 
 namespace polarslam {
 
-bool finitePose(const Pose2& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
-
 Mat3 covarianceFloor(double sigma_xy, double sigma_theta) {
   return Vec3(sigma_xy * sigma_xy, sigma_xy * sigma_xy, sigma_theta * sigma_theta).asDiagonal();
 }

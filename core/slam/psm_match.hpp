@@ -20,7 +20,6 @@ struct RobotFrameMatch {
   double overlap = 0.0;  ///< associated bearings over the smaller of the two scans' usable readings
 };
 
-bool finitePose(const Pose2& p);
 /// diag(σxy², σxy², σθ²).
 Mat3 covarianceFloor(double sigma_xy, double sigma_theta);
 

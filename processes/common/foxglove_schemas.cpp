@@ -5,6 +5,8 @@
 #include <stdexcept>
 
 namespace polarslam::foxglove {
+// Named, so that these builders cannot meet foxglove_messages.cpp's message builders of the same names.
+namespace json_schema {
 namespace {
 
 using Json = nlohmann::json;
@@ -184,16 +186,17 @@ const std::map<std::string, std::function<Json()>>& builders() {
 }
 
 }  // namespace
+}  // namespace json_schema
 
 nlohmann::json schema(const std::string& schema_name) {
-  const auto it = builders().find(schema_name);
-  if (it == builders().end()) throw std::invalid_argument("no JSON schema for " + schema_name);
+  const auto it = json_schema::builders().find(schema_name);
+  if (it == json_schema::builders().end()) throw std::invalid_argument("no JSON schema for " + schema_name);
   return it->second();
 }
 
 std::vector<std::string> schemaNames() {
   std::vector<std::string> names;
-  for (const auto& entry : builders()) names.push_back(entry.first);
+  for (const auto& entry : json_schema::builders()) names.push_back(entry.first);
   return names;
 }
 

@@ -31,13 +31,13 @@ double residentMegabytes() {
   return static_cast<double>(pages_resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / 1e6;
 }
 
+}  // namespace
+
 std::string hostName() {
   char buf[256] = {0};
   gethostname(buf, sizeof(buf) - 1);
   return buf;
 }
-
-}  // namespace
 
 int64_t nowUtime() {
   return std::chrono::duration_cast<std::chrono::microseconds>(

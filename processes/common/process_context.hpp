@@ -25,6 +25,8 @@ class App;
 namespace polarslam {
 
 int64_t nowUtime();
+/// This machine's name, as PROCESS_STATUS carries it.
+std::string hostName();
 
 /// Counts per-channel sequence gaps and repeats. Returns false for a duplicate or stale message.
 /// A sequence number that starts over (0 or 1, or far below the last one) is a restarted
@@ -78,8 +80,12 @@ class ProcessContext {
         reject(channel + ": message does not decode as " + MsgT::getTypeName());
         return;
       }
-      if (stamps == Stamps::StreamTime)
+      if (stamps == Stamps::StreamTime) {
+        // Sequence first: a message the time gate rejects is counted rejected, not also as a gap.
+        if constexpr (requires { msg.seq; })
+          if (!checkSequence(channel, msg.seq)) return;
         if (const std::string why = time_gate_.admit(channel, msg.utime); !why.empty()) return reject(why);
+      }
       if (journal_ && !replaying_) journal_->append(channel, rbuf->recv_utime, rbuf->data, rbuf->data_size);
       handler(msg);
     };
@@ -89,9 +95,9 @@ class ProcessContext {
     subscriptions_.push_back(std::move(sub));
   }
 
-  /// The usual input path for stream data: decode as MsgT, gate its time stamp, convert to the
-  /// core type ValueT (a conversion that fails is rejected with its reason), check the sequence
-  /// number, then call `handler`, which counts the message handled (or rejects it) itself.
+  /// The usual input path for stream data: decode as MsgT, check its sequence number, gate its time
+  /// stamp, convert to the core type ValueT (a conversion that fails is rejected with its reason),
+  /// then call `handler`, which counts the message handled (or rejects it) itself.
   template <typename MsgT, typename ValueT>
   void subscribeConverted(const std::string& channel, std::function<void(ValueT&)> handler) {
     subscribe<MsgT>(
@@ -99,7 +105,6 @@ class ProcessContext {
         [this, channel, handler](const MsgT& msg) {
           ValueT value;
           if (const std::string why = fromLcm(msg, value); !why.empty()) return reject(why);
-          if (!checkSequence(channel, msg.seq)) return;
           handler(value);
         },
         Stamps::StreamTime);

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -76,6 +77,8 @@ struct BridgeServer::Impl {
   std::map<Handle, Client, std::owner_less<Handle>> clients;  // io thread only
   std::mutex events_mutex;
   ServerEvents events;
+  mutable std::mutex subscribed_mutex;
+  std::set<uint32_t> subscribed;  // channels some client subscribes to
   Server::timer_ptr flush_timer;
 
   void record(const foxglove::ClientSession::Outcome& outcome) {
@@ -121,11 +124,22 @@ struct BridgeServer::Impl {
     note("client connected: " + it->second.address + " (" + std::to_string(clients.size()) + " connected)");
   }
 
+  /// After any change of subscriptions (a client's message, a disconnect).
+  void updateSubscribed() {
+    std::set<uint32_t> now;
+    for (const auto& [hdl, client] : clients)
+      for (const foxglove::Channel& channel : channels.channels())
+        if (client.session.subscriptionFor(channel.id)) now.insert(channel.id);
+    std::lock_guard lock(subscribed_mutex);
+    subscribed.swap(now);
+  }
+
   void onClose(Handle hdl) {
     const auto it = clients.find(hdl);
     if (it == clients.end()) return;
     const std::string address = it->second.address;
     clients.erase(it);
+    updateSubscribed();
     client_count = clients.size();
     note("client disconnected: " + address + " (" + std::to_string(clients.size()) + " connected)");
   }
@@ -137,6 +151,7 @@ struct BridgeServer::Impl {
     const foxglove::ClientSession::Outcome outcome =
         text ? it->second.session.onText(msg->get_payload()) : it->second.session.onBinary(msg->get_payload());
     for (const std::string& reply : outcome.replies) sendText(hdl, reply);
+    updateSubscribed();
     record(outcome);
   }
 
@@ -232,6 +247,11 @@ void BridgeServer::stop() {
   if (!impl_ || !impl_->thread.joinable()) return;
   impl_->server.stop();
   impl_->thread.join();
+}
+
+bool BridgeServer::subscribed(uint32_t channel_id) const {
+  std::lock_guard lock(impl_->subscribed_mutex);
+  return impl_->subscribed.count(channel_id) > 0;
 }
 
 void BridgeServer::broadcast(uint32_t channel_id, uint64_t receive_time_ns, std::string payload) {

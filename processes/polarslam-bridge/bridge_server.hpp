@@ -8,6 +8,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,8 @@ class BridgeServer {
   /// Listens (throws std::runtime_error when the address is taken or invalid) and starts the thread.
   void start();
   void stop();
+  /// Whether any client has subscribed to `channel_id` (a message for none need not be made); thread-safe.
+  bool subscribed(uint32_t channel_id) const;
   /// Queues `payload` (a JSON message) for every client subscribed to `channel_id`; thread-safe.
   void broadcast(uint32_t channel_id, uint64_t receive_time_ns, std::string payload);
   ServerEvents takeEvents();

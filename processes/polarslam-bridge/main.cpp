@@ -83,7 +83,7 @@ class Bridge {
     for (const std::string& pose : {c.slam_pose, c.psm_slam_pose, c.ground_truth})
       context_.subscribe<polarslam::pose_t>(pose, [this, pose](const auto& msg) { onPose(pose, msg); });
     context_.subscribeConverted<polarslam::slam_map_t, FeatureMap>(c.slam_map, [this](FeatureMap& map) {
-      send(o_.channels.slam_map, foxglove::featureMapScene(map));
+      send(o_.channels.slam_map, [&] { return foxglove::featureMapScene(map); });
     });
     context_.subscribe<polarslam::pose_graph_t>(c.graph, [this](const auto& msg) { onGraph(msg); });
     for (const std::string& path : {c.planned_path, c.grid_path})
@@ -98,7 +98,8 @@ class Bridge {
     next_trajectories_ = now + std::chrono::milliseconds(static_cast<int64_t>(o_.trajectory_period * 1000.0));
     for (auto& [channel, trajectory] : trajectories_)
       if (trajectory.takeChanged())
-        send(trajectoryTopic(channel), foxglove::posesInFrame(trajectory.poses(), trajectory.utime(), trajectory.frame()));
+        send(trajectoryTopic(channel),
+             [&] { return foxglove::posesInFrame(trajectory.poses(), trajectory.utime(), trajectory.frame()); });
   }
 
   void stop() { server_->stop(); }
@@ -111,29 +112,34 @@ class Bridge {
 
   static uint64_t nowNanoseconds() { return static_cast<uint64_t>(nowUtime()) * 1000u; }
 
-  /// `received_ns`: when the LCM message arrived (the receive time clients see; latency is measured from it).
-  void send(const std::string& topic, const Json& message, uint64_t received_ns = nowNanoseconds()) {
+  /// `build` makes the message, only when a client has subscribed to `topic`: without viewers the
+  /// bridge costs next to nothing. `received_ns`: when the LCM message arrived (the receive time
+  /// clients see; latency is measured from it).
+  template <typename Build>
+  void send(const std::string& topic, Build build, uint64_t received_ns = nowNanoseconds()) {
     context_.handled();
-    server_->broadcast(*table_.find(topic), received_ns, message.dump());
+    const uint32_t channel = *table_.find(topic);
+    if (server_->subscribed(channel)) server_->broadcast(channel, received_ns, build().dump());
   }
 
   void onLaser(const LaserScan& scan) {
     const uint64_t received = nowNanoseconds();
-    send(kTransformTopic, foxglove::frameTransform(scan.laser_pose, scan.utime, foxglove::kBaseFrame, foxglove::kLaserFrame),
+    send(kTransformTopic,
+         [&] { return foxglove::frameTransform(scan.laser_pose, scan.utime, foxglove::kBaseFrame, foxglove::kLaserFrame); },
          received);
-    send(o_.channels.laser, foxglove::laserScan(scan), received);
+    send(o_.channels.laser, [&] { return foxglove::laserScan(scan); }, received);
   }
 
   void onOdometry(const OdometryReading& odometry) {
     odometry_ = odometry.pose;
-    send(kTransformTopic, foxglove::frameTransform(odometry.pose, odometry.utime, "odom", foxglove::kBaseFrame));
+    send(kTransformTopic, [&] { return foxglove::frameTransform(odometry.pose, odometry.utime, "odom", foxglove::kBaseFrame); });
   }
 
   void onGrid(const std::string& channel, const polarslam::grid_map_t& msg) {
     GridSlice slice;
     if (const std::string why = fromLcm(msg, slice); !why.empty()) return context_.reject(why);
     if (!context_.checkSequence(channel, msg.seq)) return;
-    send(channel, foxglove::grid(slice, msg.utime, msg.frame.empty() ? "map" : msg.frame));
+    send(channel, [&] { return foxglove::grid(slice, msg.utime, msg.frame.empty() ? "map" : msg.frame); });
   }
 
   void onPose(const std::string& channel, const polarslam::pose_t& msg) {
@@ -141,23 +147,23 @@ class Bridge {
     if (const std::string why = fromLcm(msg, pose); !why.empty()) return context_.reject(why);
     if (!context_.checkSequence(channel, msg.seq)) return;
     const std::string frame = msg.frame.empty() ? "map" : msg.frame;
-    send(channel, foxglove::poseInFrame(pose, frame));
+    send(channel, [&] { return foxglove::poseInFrame(pose, frame); });
     trajectories_[channel].add(pose, frame);
     // One estimator places odom in the map (a frame has one parent): map→odom = pose ⊕ odometry⁻¹.
     if (channel == o_.channels.tf_pose && odometry_)
-      send(kTransformTopic, foxglove::frameTransform(pose.pose * odometry_->inverse(), pose.utime, frame, "odom"));
+      send(kTransformTopic, [&] { return foxglove::frameTransform(pose.pose * odometry_->inverse(), pose.utime, frame, "odom"); });
   }
 
   void onGraph(const polarslam::pose_graph_t& msg) {
     PoseGraph graph;
     if (const std::string why = fromLcm(msg, graph); !why.empty()) return context_.reject(why);
-    send(o_.channels.graph, foxglove::poseGraphScene(graph, msg.utime));
+    send(o_.channels.graph, [&] { return foxglove::poseGraphScene(graph, msg.utime); });
   }
 
   void onPath(const std::string& channel, const polarslam::path_t& msg) {
     std::vector<Vec2> points;
     if (const std::string why = fromLcm(msg, points); !why.empty()) return context_.reject(why);
-    send(channel, foxglove::posesInFrame(headingsAlong(points), msg.utime, msg.frame.empty() ? "map" : msg.frame));
+    send(channel, [&] { return foxglove::posesInFrame(headingsAlong(points), msg.utime, msg.frame.empty() ? "map" : msg.frame); });
   }
 
   void onStatus(const polarslam::process_status_t& msg) {
@@ -165,9 +171,9 @@ class Bridge {
     foxglove::ProcessState s{msg.utime,         msg.name,         msg.host,         msg.state,       msg.pid,
                              msg.restarts,      msg.messages_handled, msg.messages_rejected, msg.messages_dropped,
                              msg.cpu_percent,   msg.rss_mb};
-    send(kStatusChannel, foxglove::processStatus(s));
+    send(kStatusChannel, [&] { return foxglove::processStatus(s); });
     std::string& last = process_states_[msg.name + "@" + msg.host + ":" + std::to_string(msg.pid)];
-    if (last != msg.state) send(kLogTopic, foxglove::processLog(s, last));
+    if (last != msg.state) send(kLogTopic, [&] { return foxglove::processLog(s, last); });
     last = msg.state;
   }
 

@@ -61,10 +61,9 @@ int main(int argc, char** argv) {
       if (!slam.started()) return;  // nothing received yet that gives the pose a time
       const PoseStamped pose = slam.currentPose();
       context.publish(pose_channel, toLcm(pose, "map", pose_seq++));
-      const FeatureMap map = slam.map();
-      if (map.utime - last_map_utime >= map_period_us) {
-        context.publish(map_channel, toLcm(map, map_seq++));
-        last_map_utime = map.utime;
+      if (slam.filterTime() - last_map_utime >= map_period_us) {  // the map is made only when due
+        context.publish(map_channel, toLcm(slam.map(), map_seq++));
+        last_map_utime = slam.filterTime();
       }
     };
     auto rejectIf = [&](const std::string& why) {
@@ -84,7 +83,6 @@ int main(int argc, char** argv) {
     });
     if (!laser_channel.empty())
       context.subscribe<polarslam::laser_scan_t>(laser_channel, [&](const polarslam::laser_scan_t& msg) {
-        if (!context.checkSequence(laser_channel, msg.seq)) return;
         if (rejectIf(slam.requestAnchors(msg.utime))) return;
         context.handled();
         publishOutputs();

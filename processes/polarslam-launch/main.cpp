@@ -16,7 +16,7 @@
 #include "console.hpp"
 #include "launch/group_file.hpp"
 #include "run_logs.hpp"
-#include "status_publisher.hpp"
+#include "status_channel.hpp"
 #include "supervisor.hpp"
 
 extern char** environ;
@@ -39,12 +39,6 @@ Environment currentEnvironment() {
     if (eq != std::string::npos) env[entry.substr(0, eq)] = entry.substr(eq + 1);
   }
   return env;
-}
-
-std::string hostName() {
-  char buf[256] = {0};
-  gethostname(buf, sizeof(buf) - 1);
-  return buf;
 }
 
 /// The launcher's own folder, put first on the children's PATH: the sibling polarslam-* programs.
@@ -96,7 +90,7 @@ int main(int argc, char** argv) {
     const std::string host_label = host.empty() ? hostName() : host;
     Environment child_env = env;
     if (!url.empty()) child_env["LCM_DEFAULT_URL"] = url;
-    StatusPublisher status(resolveLcmUrl(url), host_label);
+    StatusChannel status(resolveLcmUrl(url), host_label);
     RunLogs logs(run_dir.empty() ? defaultRunDir(host_label) : run_dir);
     child_env["POLARSLAM_RUN_DIR"] = std::filesystem::absolute(logs.dir()).string();
     // Each launch has its own identity: a journal left in a reused run folder by an earlier launch

@@ -39,7 +39,7 @@ void signalGroup(int pgid, int sig) {
 }  // namespace
 
 Supervisor::Supervisor(std::vector<CommandSpec> commands, Environment base_env, std::string bin_dir,
-                       RunLogs& logs, Console& console, StatusPublisher& status)
+                       RunLogs& logs, Console& console, StatusChannel& status)
     : table_(std::move(commands), LaunchClock::now()),
       base_env_(std::move(base_env)),
       bin_dir_(std::move(bin_dir)),
@@ -63,6 +63,7 @@ int Supervisor::run() {
     if (finished()) break;
     waitForEvents(now);
     handleSignals(LaunchClock::now());
+    receiveReports();
     readOutput(false);
     reapChildren(LaunchClock::now());
     enforceDeadlines(LaunchClock::now());
@@ -79,7 +80,25 @@ int Supervisor::run() {
 bool Supervisor::finished() const { return !table_.anyActive() && ending_.empty(); }
 
 void Supervisor::startDue(LaunchClock::time_point now) {
-  for (size_t i : table_.dueToStart(now)) start(i, now);
+  for (size_t i : table_.dueToStart(now)) {
+    if (const auto late = table_.awaited(i); !late.empty() && table_[i].state == RunState::Scheduled) {
+      std::string names;
+      for (const auto& name : late) names += (names.empty() ? "" : ", ") + name;
+      event(table_[i].spec.name + ": " + names + " did not report running within wait_timeout (" +
+            seconds(table_[i].spec.wait_timeout_s) + "): starting it anyway");
+    }
+    start(i, now);
+  }
+}
+
+// A process's own "running" report: it has subscribed. The launcher's own messages name the
+// command, the process's own its program; both carry the pid of the command's process group.
+void Supervisor::receiveReports() {
+  for (const process_status_t& report : status_.receive()) {
+    if (report.state != "running" || report.pid <= 0) continue;
+    const auto i = table_.indexOfPid(getpgid(report.pid));
+    if (i && report.name != table_[*i].spec.name) table_.reportedRunning(*i);
+  }
 }
 
 void Supervisor::start(size_t i, LaunchClock::time_point now) {
@@ -104,13 +123,13 @@ void Supervisor::start(size_t i, LaunchClock::time_point now) {
 
 LaunchClock::time_point Supervisor::nextWakeup(LaunchClock::time_point now) const {
   LaunchClock::time_point wake = std::min(next_status_, console_.nextRefresh());
-  if (const auto next = table_.nextStart(); next && !shutting_down_) wake = std::min(wake, *next);
+  if (const auto next = table_.nextStart(now); next && !shutting_down_) wake = std::min(wake, *next);
   if (!ending_.empty()) wake = std::min(wake, now + kGroupCheckPeriod);
   return wake;
 }
 
 void Supervisor::waitForEvents(LaunchClock::time_point now) {
-  std::vector<pollfd> fds{{signals_.fd(), POLLIN, 0}};
+  std::vector<pollfd> fds{{signals_.fd(), POLLIN, 0}, {status_.fd(), POLLIN, 0}};
   for (const auto& s : streams_) fds.push_back({s.fd, POLLIN, 0});
   const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(nextWakeup(now) - now);
   // Round up so the loop does not spin in the last fraction of a millisecond before a deadline.

@@ -12,14 +12,14 @@
 #include "launch/process_table.hpp"
 #include "run_logs.hpp"
 #include "signal_pipe.hpp"
-#include "status_publisher.hpp"
+#include "status_channel.hpp"
 
 namespace polarslam {
 
 class Supervisor {
  public:
   Supervisor(std::vector<CommandSpec> commands, Environment base_env, std::string bin_dir, RunLogs& logs,
-             Console& console, StatusPublisher& status);
+             Console& console, StatusChannel& status);
   /// Runs until every command has ended, or until a stop signal has been handled and every
   /// process is gone. Returns 0, or 1 if a command failed to start or crashed for good.
   int run();
@@ -44,6 +44,7 @@ class Supervisor {
   };
 
   void startDue(LaunchClock::time_point now);
+  void receiveReports();
   void start(size_t i, LaunchClock::time_point now);
   void waitForEvents(LaunchClock::time_point now);
   LaunchClock::time_point nextWakeup(LaunchClock::time_point now) const;
@@ -70,7 +71,7 @@ class Supervisor {
   std::string bin_dir_;
   RunLogs& logs_;
   Console& console_;
-  StatusPublisher& status_;
+  StatusChannel& status_;
   SignalPipe signals_;
   std::vector<OutputStream> streams_;
   std::map<int, EndingGroup> ending_;  // by process group id

@@ -149,7 +149,7 @@ void setupEval(CLI::App& sub) {
   });
 }
 
-RegisterCommand reg("eval", "Score a TUM trajectory: relation metric (Kümmerle 2009) and ATE against ground truth",
+RegisterCommand reg_eval("eval", "Score a TUM trajectory: relation metric (Kümmerle 2009) and ATE against ground truth",
                     setupEval);
 
 }  // namespace

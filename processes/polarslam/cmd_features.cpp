@@ -121,7 +121,7 @@ void setupFeatures(CLI::App& sub) {
   sub.callback([cmd] { runFeatures(*cmd); });
 }
 
-const RegisterCommand kRegister("features", "Laser line and corner features of every scan of a log (JSON lines)",
+RegisterCommand reg_features("features", "Laser line and corner features of every scan of a log (JSON lines)",
                                 setupFeatures);
 
 }  // namespace

@@ -50,7 +50,7 @@ void setupMapCheck(CLI::App& sub) {
   sub.callback([o] { checkMap(*o); });
 }
 
-RegisterCommand reg("map-check", "Load and check a saved map (checksums, version, laser) and summarise it",
+RegisterCommand reg_map_check("map-check", "Load and check a saved map (checksums, version, laser) and summarise it",
                     setupMapCheck);
 
 }  // namespace

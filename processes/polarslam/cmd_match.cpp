@@ -110,7 +110,7 @@ void setupMatch(CLI::App& sub) {
   sub.callback([o] { runMatch(*o); });
 }
 
-RegisterCommand reg("match", "Match laser scan pairs from a JSON-lines file (PSM, PSM-C or ICP)", setupMatch);
+RegisterCommand reg_match("match", "Match laser scan pairs from a JSON-lines file (PSM, PSM-C or ICP)", setupMatch);
 
 }  // namespace
 }  // namespace polarslam

@@ -161,7 +161,7 @@ void setupReport(CLI::App& sub) {
   sub.callback([dir, title] { writeReport(*dir, *title); });
 }
 
-RegisterCommand reg("report", "Write report.html (figures and plots) for the run folders in DIR", setupReport);
+RegisterCommand reg_report("report", "Write report.html (figures and plots) for the run folders in DIR", setupReport);
 
 }  // namespace
 }  // namespace polarslam

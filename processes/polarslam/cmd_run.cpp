@@ -351,7 +351,7 @@ void setupRun(CLI::App& sub) {
   sub.callback([o] { runPipeline(*o); });
 }
 
-RegisterCommand reg("run", "Run a SLAM pipeline offline over an LCM log; write trajectory, maps and a report", setupRun);
+RegisterCommand reg_run("run", "Run a SLAM pipeline offline over an LCM log; write trajectory, maps and a report", setupRun);
 
 }  // namespace
 }  // namespace polarslam

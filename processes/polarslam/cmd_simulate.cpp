@@ -47,7 +47,7 @@ void setupSimulate(CLI::App& sub) {
   sub.callback([o] { runSimulate(*o); });
 }
 
-RegisterCommand reg("simulate", "Simulate the robot in a world and write an LCM log", setupSimulate);
+RegisterCommand reg_simulate("simulate", "Simulate the robot in a world and write an LCM log", setupSimulate);
 
 }  // namespace
 }  // namespace polarslam

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -17,12 +18,13 @@
 #include <thread>
 #include <vector>
 
+#include "source_path.hpp"
+
 extern char** environ;
 
 namespace polarslam::testing {
 
 inline std::string binPath(const std::string& name) { return std::string(POLARSLAM_BINARY_DIR) + "/bin/" + name; }
-inline std::string sourcePath(const std::string& rel) { return std::string(POLARSLAM_SOURCE_DIR) + "/" + rel; }
 
 /// A child process that is killed (SIGKILL) if still running when the object goes away.
 class ChildProcess {
@@ -93,6 +95,11 @@ inline std::string readFile(const std::filesystem::path& path) {
 inline nlohmann::json readJson(const std::filesystem::path& path) {
   std::ifstream in(path);
   return nlohmann::json::parse(in, nullptr, false);
+}
+
+/// A number of a report.json (NaN when the report lacks it).
+inline double figure(const nlohmann::json& report, const char* key) {
+  return report.contains(key) ? report[key].get<double>() : std::nan("");
 }
 
 /// An empty folder of this test in the temporary folder: polarslam-NAME-PID.

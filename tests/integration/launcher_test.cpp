@@ -326,6 +326,44 @@ commands:
   }
 }
 
+// replay.yaml's player waits until every stage has subscribed: a stage that takes 3 s to get there
+// still hears the first message. A command that never reports holds the start for wait_timeout only.
+TEST(Launcher, AProducerStartsOnceItsConsumersReportRunningOrTheirTimeoutHasPassed) {
+  const auto dir = launcherScratch("wait-for");
+  const std::string marker = (dir / "subscribing").string();
+  const std::string stages = R"(name: wait-test
+stop_grace: 2
+stop_signal: SIGINT
+commands:
+  - name: stage
+    command: 'sleep 3 && touch ")" + marker + R"(" && exec polarslam-fusion --config ")" +
+                             sourcePath("config/ekf.yaml") + R"("'
+  - name: quiet
+    exec: sleep
+    args: ["1000"]
+)";
+  // The producer succeeds only if the stage was already subscribing when it started.
+  const std::string producer = "  - name: producer\n    command: 'test -e \"" + marker +
+                               "\"'\n    required: true\n    auto_respawn: false\n    start_order: 10\n";
+  {
+    Launcher launcher(dir, writeFile(dir / "stage.yaml", stages + producer + "    wait_for: [stage]\n"));
+    ASSERT_TRUE(launcher.process().waitFor(60s)) << launcher.output();
+    const std::string out = launcher.output();
+    EXPECT_EQ(launcher.process().exitCode(), 0) << out;
+    EXPECT_EQ(out.find("did not report running"), std::string::npos) << out;
+  }
+  std::filesystem::remove(marker);
+  {
+    Launcher launcher(dir, writeFile(dir / "quiet.yaml", stages + producer + "    wait_for: [quiet]\n    wait_timeout: 1\n"));
+    ASSERT_TRUE(launcher.process().waitFor(60s)) << launcher.output();
+    const std::string out = launcher.output();
+    EXPECT_EQ(launcher.process().exitCode(), 1) << "the producer started before the stage subscribed\n" << out;
+    EXPECT_NE(out.find("[launch] producer: quiet did not report running within wait_timeout (1 s): starting it anyway"),
+              std::string::npos)
+        << out;
+  }
+}
+
 namespace {
 
 /// Shell commands that write "NAME started|signalled|stopped at <CLOCK_MONOTONIC ns>" lines into

@@ -24,6 +24,7 @@ using polarslam::testing::binPath;
 using polarslam::testing::ChildProcess;
 using polarslam::testing::freshDir;
 using polarslam::testing::readFile;
+using polarslam::testing::figure;
 using polarslam::testing::readJson;
 using polarslam::testing::runToEnd;
 using polarslam::testing::sourcePath;
@@ -96,10 +97,6 @@ nlohmann::json runLive(const fs::path& dir, const std::string& name, const std::
             0)
       << readFile(dir / ("scored-" + name + ".out"));
   return readJson(scored / "report.json");
-}
-
-double figure(const nlohmann::json& report, const char* key) {
-  return report.contains(key) ? report[key].get<double>() : std::nan("");
 }
 
 /// scans_stored of the last GRID_STATUS in a recorded log (-1: none).

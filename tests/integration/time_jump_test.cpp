@@ -123,6 +123,7 @@ TEST(TimeJump, LiveEkfSlamRejectsTheFutureMessageKeepsGoingAndKeepsItOutOfTheJou
   for (auto end = std::chrono::steady_clock::now() + 300ms; std::chrono::steady_clock::now() < end;) lcm.handleTimeout(20);
   EXPECT_EQ(status.messages_rejected, 1) << readFile(dir / "ekf-slam.log");
   EXPECT_EQ(status.messages_handled, 59) << "the odometry after the future one is not 'time went backwards'";
+  EXPECT_EQ(status.messages_dropped, 0) << "the rejected message was counted again as a sequence gap";
 
   polarslam::LcmLogReader reader(journal);
   polarslam::LogEvent event;

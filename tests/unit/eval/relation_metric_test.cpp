@@ -9,19 +9,19 @@
 namespace polarslam {
 namespace {
 
-constexpr int64_t kSecond = 1000000;
+constexpr int64_t kUsPerSecond = 1000000;
 
 PoseStamped at(double seconds, double x, double y, double theta) {
   PoseStamped p;
-  p.utime = static_cast<int64_t>(std::llround(seconds * kSecond));
+  p.utime = static_cast<int64_t>(std::llround(seconds * kUsPerSecond));
   p.pose = Pose2(x, y, theta);
   return p;
 }
 
 Relation relation(double t1, double t2, double x, double y, double yaw) {
   Relation r;
-  r.t1 = static_cast<int64_t>(std::llround(t1 * kSecond));
-  r.t2 = static_cast<int64_t>(std::llround(t2 * kSecond));
+  r.t1 = static_cast<int64_t>(std::llround(t1 * kUsPerSecond));
+  r.t2 = static_cast<int64_t>(std::llround(t2 * kUsPerSecond));
   r.x = x;
   r.y = y;
   r.yaw = yaw;
@@ -150,11 +150,11 @@ TEST(RelationMetric, NonPlanarRelationComponentsCountAsError) {
 TEST(RelationMetric, RelationsFromGroundTruthChainAtTheSpacing) {
   std::vector<PoseStamped> truth;
   for (int i = 0; i <= 30; ++i) truth.push_back(at(0.1 * i, std::cos(0.1 * i), std::sin(0.1 * i), 0.1 * i));
-  const std::vector<Relation> r = relationsFromGroundTruth(truth, kSecond);
+  const std::vector<Relation> r = relationsFromGroundTruth(truth, kUsPerSecond);
   ASSERT_EQ(r.size(), 3u);
   EXPECT_EQ(r[0].t1, 0);
-  EXPECT_EQ(r[0].t2, kSecond);
-  EXPECT_EQ(r[2].t2, 3 * kSecond);
+  EXPECT_EQ(r[0].t2, kUsPerSecond);
+  EXPECT_EQ(r[2].t2, 3 * kUsPerSecond);
   EXPECT_NEAR(r[1].yaw, 1.0, 1e-9);
   // The ground truth itself scores zero on its own relations.
   const RelationMetric m = evaluateRelations(truth, r);

@@ -9,7 +9,7 @@
 namespace polarslam {
 namespace {
 
-std::string errorOf(const std::string& text) {
+std::string relationsErrorOf(const std::string& text) {
   try {
     parseRelations(text, "r.relations");
   } catch (const TextFormatError& e) {
@@ -40,28 +40,28 @@ TEST(Relations, ParsesKuemmerleLines) {
 
 TEST(Relations, ErrorsNameFileAndLine) {
   const std::string good = "1 2 0 0 0 0 0 0\n";
-  EXPECT_EQ(errorOf(good + "1 2 0 0 0 0 0\n"), "r.relations:2: expected 8 fields 't1 t2 x y z roll pitch yaw', found 7");
-  EXPECT_EQ(errorOf(good + good + "1 2 0 0 0 0 0 0 9\n"),
+  EXPECT_EQ(relationsErrorOf(good + "1 2 0 0 0 0 0\n"), "r.relations:2: expected 8 fields 't1 t2 x y z roll pitch yaw', found 7");
+  EXPECT_EQ(relationsErrorOf(good + good + "1 2 0 0 0 0 0 0 9\n"),
             "r.relations:3: expected 8 fields 't1 t2 x y z roll pitch yaw', found 9");
-  EXPECT_EQ(errorOf(good + "1 x2 0 0 0 0 0 0\n"), "r.relations:2: bad timestamp t2 'x2'");
-  EXPECT_EQ(errorOf(good + "1 2 0 0 0 0 0 1e999\n"), "r.relations:2: bad yaw '1e999'");
-  EXPECT_EQ(errorOf(good + "1 2 0 0,5 0 0 0 0\n"), "r.relations:2: bad y '0,5'");
+  EXPECT_EQ(relationsErrorOf(good + "1 x2 0 0 0 0 0 0\n"), "r.relations:2: bad timestamp t2 'x2'");
+  EXPECT_EQ(relationsErrorOf(good + "1 2 0 0 0 0 0 1e999\n"), "r.relations:2: bad yaw '1e999'");
+  EXPECT_EQ(relationsErrorOf(good + "1 2 0 0,5 0 0 0 0\n"), "r.relations:2: bad y '0,5'");
 }
 
 TEST(Relations, TruncatedFileNamesItsLastLine) {
-  EXPECT_EQ(errorOf("1 2 0 0 0 0 0 0\n3 4 0.1 0."), "r.relations:2: expected 8 fields 't1 t2 x y z roll pitch yaw', found 4");
+  EXPECT_EQ(relationsErrorOf("1 2 0 0 0 0 0 0\n3 4 0.1 0."), "r.relations:2: expected 8 fields 't1 t2 x y z roll pitch yaw', found 4");
 }
 
 TEST(Relations, BinaryContentIsRejectedWithItsLine) {
   std::string binary = "1 2 0 0 0 0 0 0\n";
   binary += std::string("\x89PNG\r\n\x1a\n\0\0\0", 11);
-  const std::string what = errorOf(binary);
+  const std::string what = relationsErrorOf(binary);
   EXPECT_EQ(what, "r.relations:3: binary content (byte 0x1a), not a text file");
 }
 
 TEST(Relations, EmptyFileIsAnError) {
-  EXPECT_EQ(errorOf(""), "r.relations:1: no relations in file");
-  EXPECT_EQ(errorOf("# only a comment\n\n"), "r.relations:1: no relations in file");
+  EXPECT_EQ(relationsErrorOf(""), "r.relations:1: no relations in file");
+  EXPECT_EQ(relationsErrorOf("# only a comment\n\n"), "r.relations:1: no relations in file");
 }
 
 TEST(Relations, MissingFileNamesIt) {

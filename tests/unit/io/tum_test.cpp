@@ -25,7 +25,7 @@ void writeText(const fs::path& path, const std::string& text) {
   out << text;
 }
 
-std::string errorOf(const std::string& text) {
+std::string tumErrorOf(const std::string& text) {
   try {
     parseTumTrajectory(text, "traj.tum");
   } catch (const TextFormatError& e) {
@@ -82,11 +82,11 @@ TEST(Tum, ReadsScientificTimestampsCommentsAndUnnormalisedQuaternions) {
 }
 
 TEST(Tum, MalformedLinesNameFileAndLine) {
-  EXPECT_EQ(errorOf("0 0 0 0 0 0 0 1\n1 2 3\n"), "traj.tum:2: expected 8 fields 't x y z qx qy qz qw', found 3");
-  EXPECT_EQ(errorOf("# c\n0 0 nan 0 0 0 0 1\n"), "traj.tum:2: bad y 'nan'");
-  EXPECT_EQ(errorOf("abc 0 0 0 0 0 0 1\n"), "traj.tum:1: bad timestamp 'abc'");
-  EXPECT_EQ(errorOf("0 0 0 0 0 0 0 0\n"), "traj.tum:1: quaternion has zero length");
-  EXPECT_NE(errorOf(std::string("0 0 0 0 0 0 0 1\n0 0") + '\0' + " 0").find("traj.tum:2: binary content"),
+  EXPECT_EQ(tumErrorOf("0 0 0 0 0 0 0 1\n1 2 3\n"), "traj.tum:2: expected 8 fields 't x y z qx qy qz qw', found 3");
+  EXPECT_EQ(tumErrorOf("# c\n0 0 nan 0 0 0 0 1\n"), "traj.tum:2: bad y 'nan'");
+  EXPECT_EQ(tumErrorOf("abc 0 0 0 0 0 0 1\n"), "traj.tum:1: bad timestamp 'abc'");
+  EXPECT_EQ(tumErrorOf("0 0 0 0 0 0 0 0\n"), "traj.tum:1: quaternion has zero length");
+  EXPECT_NE(tumErrorOf(std::string("0 0 0 0 0 0 0 1\n0 0") + '\0' + " 0").find("traj.tum:2: binary content"),
             std::string::npos);
 }
 

@@ -147,7 +147,13 @@ TEST_F(GroupFileTest, ErrorsNameFileAndLine) {
   EXPECT_EQ(loadError("commands:\n  - name: a\n    exec: sleep\n    respawn: yes\n"),
             f + ":4: unknown key 'respawn' in command in bad (allowed: name, exec, command, args, environment, "
                 "working_dir, host, auto_respawn, stop_signal, stop_grace, respawn_backoff, start_order, start_delay, "
-                "required)");
+                "wait_for, wait_timeout, required)");
+  EXPECT_EQ(loadError("commands:\n  - name: a\n    exec: sleep\n    wait_for: [b]\n"),
+            f + ":2: wait_for names 'b', which is not a command of this file");
+  EXPECT_EQ(loadError("commands:\n  - name: a\n    exec: sleep\n    wait_for: [a]\n"),
+            f + ":2: 'a' waits for itself (wait_for)");
+  EXPECT_EQ(loadError("commands:\n  - name: a\n    exec: sleep\n    wait_for: b\n"),
+            f + ":4: bad/a.wait_for: expected a list");
   EXPECT_EQ(loadError("commands:\n  - name: a\n    exec: sleep\n    command: sleep 1\n"),
             f + ":4: bad/a: give either 'exec' (a program) or 'command' (a shell line), not both");
   EXPECT_EQ(loadError("commands:\n  - name: a\n    args: [1]\n"),
@@ -215,6 +221,14 @@ TEST(GroupFile, ShippedGroupsStartConsumersFirstSoTheyStopLast) {
   EXPECT_EQ(namesInStartOrder("replay.yaml"),
             (std::vector<std::string>{"recorder", "bridge", "grid", "grid-psm", "ekf-slam", "psm-slam", "fusion", "features",
                                       "player"}));
+  // The producer also waits until every other stage has subscribed (the recorder reports nothing).
+  for (const std::string file : {"pipeline.yaml", "replay.yaml"}) {
+    auto commands = selectCommands(loadGroupFile(groups + file, {}), "", "");
+    std::vector<std::string> consumers;
+    for (const auto& c : commands)
+      if (c.name != commands.back().name && c.name != "recorder") consumers.push_back(c.name);
+    EXPECT_EQ(commands.back().wait_for, consumers) << file;
+  }
 }
 
 TEST(GroupFile, ExpandsVariables) {

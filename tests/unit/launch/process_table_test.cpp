@@ -33,7 +33,7 @@ TEST(ProcessTable, StartsEachCommandItsDelayAfterThePrevious) {
   EXPECT_EQ(table.dueToStart(t0 + 1499ms), (std::vector<size_t>{0, 1}));
   EXPECT_EQ(table.dueToStart(t0 + 1500ms), (std::vector<size_t>{0, 1, 2}));
   table.started(0, 100, t0);
-  EXPECT_EQ(*table.nextStart(), t0 + 1s);
+  EXPECT_EQ(*table.nextStart(t0), t0 + 1s);
   EXPECT_EQ(table[0].state, RunState::Running);
   EXPECT_EQ(*table.indexOfPid(100), 0u);
   EXPECT_FALSE(table.indexOfPid(101).has_value());
@@ -45,15 +45,15 @@ TEST(ProcessTable, CrashRestartsWithDoublingBackoff) {
   EXPECT_EQ(table.exited(0, kKilled, t0 + 1s), RunState::Restarting);
   EXPECT_EQ(table[0].pid, -1);
   EXPECT_EQ(table[0].last_exit, "killed by SIGKILL");
-  EXPECT_EQ(*table.nextStart(), t0 + 1250ms);
+  EXPECT_EQ(*table.nextStart(t0), t0 + 1250ms);
   EXPECT_TRUE(table.dueToStart(t0 + 1249ms).empty());
   table.started(0, 101, t0 + 1250ms);
   EXPECT_EQ(table[0].restarts, 1);
   EXPECT_EQ(table.exited(0, kFailure, t0 + 2s), RunState::Restarting);
-  EXPECT_EQ(*table.nextStart(), t0 + 2500ms);
+  EXPECT_EQ(*table.nextStart(t0), t0 + 2500ms);
   table.started(0, 102, t0 + 2500ms);
   table.exited(0, kFailure, t0 + 3s);
-  EXPECT_EQ(*table.nextStart(), t0 + 4s);  // 1 s cap
+  EXPECT_EQ(*table.nextStart(t0), t0 + 4s);  // 1 s cap
   table.started(0, 103, t0 + 4s);
   EXPECT_EQ(table[0].restarts, 3);
 }
@@ -64,10 +64,10 @@ TEST(ProcessTable, LongRunBeforeACrashResetsTheBackoff) {
   table.exited(0, kKilled, t0 + 1s);
   table.started(0, 101, t0 + 2s);
   table.exited(0, kKilled, t0 + 3s);
-  EXPECT_EQ(*table.nextStart(), t0 + 3500ms);
+  EXPECT_EQ(*table.nextStart(t0), t0 + 3500ms);
   table.started(0, 102, t0 + 4s);
   table.exited(0, kKilled, t0 + 14s);  // ran 10 s: counts as a first crash again
-  EXPECT_EQ(*table.nextStart(), t0 + 14250ms);
+  EXPECT_EQ(*table.nextStart(t0), t0 + 14250ms);
 }
 
 TEST(ProcessTable, CleanExitOrNoRespawnEndsTheProcess) {
@@ -80,7 +80,7 @@ TEST(ProcessTable, CleanExitOrNoRespawnEndsTheProcess) {
   EXPECT_EQ(table[1].last_exit, "exit 3");
   EXPECT_FALSE(table.anyActive());
   EXPECT_TRUE(table.anyFailed());
-  EXPECT_FALSE(table.nextStart().has_value());
+  EXPECT_FALSE(table.nextStart(t0).has_value());
 }
 
 TEST(ProcessTable, ExitAfterAStopRequestIsAStopEvenWhenKilled) {
@@ -107,6 +107,44 @@ TEST(ProcessTable, ShutdownCancelsPendingStarts) {
   EXPECT_EQ(table[1].state, RunState::Stopped);
   EXPECT_FALSE(table.anyActive());
   EXPECT_TRUE(table.dueToStart(t0 + 10s).empty());
+}
+
+TEST(ProcessTable, AFirstStartWaitsUntilItsConsumersReportRunningOrItsTimeoutPasses) {
+  CommandSpec player = command("player", 1.0, false);
+  player.wait_for = {"a", "b"};
+  player.wait_timeout_s = 10.0;
+  ProcessTable table({command("a"), command("b"), player}, t0);
+  table.started(0, 100, t0);
+  table.started(1, 101, t0);
+  EXPECT_EQ(table.awaited(2), (std::vector<std::string>{"a", "b"}));
+  EXPECT_TRUE(table.dueToStart(t0 + 2s).empty());
+  EXPECT_EQ(*table.nextStart(t0), t0 + 1s);         // its delay first,
+  EXPECT_EQ(*table.nextStart(t0 + 2s), t0 + 11s);   // then its timeout
+  table.reportedRunning(0);
+  EXPECT_EQ(table.awaited(2), std::vector<std::string>{"b"});
+  EXPECT_TRUE(table.dueToStart(t0 + 2s).empty());
+  table.reportedRunning(1);
+  EXPECT_TRUE(table.awaited(2).empty());
+  EXPECT_EQ(table.dueToStart(t0 + 2s), std::vector<size_t>{2});
+  EXPECT_TRUE(table.dueToStart(t0 + 500ms).empty());  // never before its delay
+
+  // A restarted consumer must report again; one that crashed for good is not waited for.
+  table.exited(1, kKilled, t0 + 3s);
+  EXPECT_EQ(table[1].state, RunState::Restarting);
+  EXPECT_EQ(table.awaited(2), std::vector<std::string>{"b"});
+  table.startFailed(1, "gone");
+  EXPECT_TRUE(table.awaited(2).empty());
+}
+
+TEST(ProcessTable, AConsumerThatNeverReportsHoldsTheStartOnlyUntilTheTimeout) {
+  CommandSpec player = command("player", 0.0, false);
+  player.wait_for = {"a"};
+  player.wait_timeout_s = 5.0;
+  ProcessTable table({command("a"), player}, t0);
+  table.started(0, 100, t0);
+  EXPECT_EQ(table.dueToStart(t0 + 4999ms), std::vector<size_t>{});
+  EXPECT_EQ(table.dueToStart(t0 + 5s), std::vector<size_t>{1});
+  EXPECT_EQ(table.awaited(1), std::vector<std::string>{"a"});  // the launcher names it when it starts anyway
 }
 
 TEST(ProcessTable, StopsTheHighestStartOrderFirstAndEqualOnesTogether) {

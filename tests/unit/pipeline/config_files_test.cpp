@@ -5,6 +5,7 @@
 
 #include <fstream>
 
+#include "source_path.hpp"
 #include "pipeline/feature_slam_estimator.hpp"
 #include "pipeline/pipelines.hpp"
 #include "pipeline/psm_slam_estimator.hpp"
@@ -13,43 +14,43 @@
 namespace polarslam {
 namespace {
 
-std::string source(const std::string& rel) { return std::string(POLARSLAM_SOURCE_DIR) + "/" + rel; }
+using testing::sourcePath;
 
 TEST(ShippedConfig, PsmSlamFileListsEveryKeyWithItsDefault) {
-  const YamlFields file(source("config/psm-slam.yaml"));
+  const YamlFields file(sourcePath("config/psm-slam.yaml"));
   PsmSlamEstimatorConfig defaults;
   ParameterTable table;
   describePsmSlamEstimatorConfig(table, defaults);
   EXPECT_TRUE(table.missingFrom(file.root()).empty())
       << "config/psm-slam.yaml lacks " << ::testing::PrintToString(table.missingFrom(file.root()));
   PipelineOptions options;
-  options.config = source("config/psm-slam.yaml");
+  options.config = sourcePath("config/psm-slam.yaml");
   EXPECT_EQ(effectiveConfigYaml("psm-slam", options), table.yaml()) << "a value differs from its default";
 }
 
 TEST(ShippedConfig, EkfFileListsEveryKeyWithItsDefault) {
-  const YamlFields file(source("config/ekf.yaml"));
+  const YamlFields file(sourcePath("config/ekf.yaml"));
   FeaturePipelineConfig defaults;
   FeaturePipelineTables tables;
   describeFeaturePipeline(tables, defaults);
   EXPECT_TRUE(tables.ekf.missingFrom(file.root()["ekf"]).empty());
   EXPECT_TRUE(tables.fusion.missingFrom(file.root()["fusion"]).empty());
   // The laser's error model comes from the robot file the pipeline file names.
-  defaults.laser.errors = laserErrorParams(loadRobotDescription(source("config/robots/default.yaml")).laser);
+  defaults.laser.errors = laserErrorParams(loadRobotDescription(sourcePath("config/robots/default.yaml")).laser);
   PipelineOptions options;
-  options.config = source("config/ekf.yaml");
+  options.config = sourcePath("config/ekf.yaml");
   EXPECT_EQ(effectiveConfigYaml("ekf", options), "ekf:\n" + tables.ekf.yaml(2) + "fusion:\n" + tables.fusion.yaml(2) +
                                                      "laser_features:\n" + tables.laser_features.yaml(2));
 }
 
 TEST(ShippedConfig, LaserFeaturesFileListsEveryKeyWithItsDefault) {
-  const YamlFields file(source("config/laser-features.yaml"));
+  const YamlFields file(sourcePath("config/laser-features.yaml"));
   LaserFeatureConfig defaults;
   ParameterTable table;
   describeLaserFeatures(table, defaults);
   EXPECT_TRUE(table.missingFrom(file.root()["laser_features"]).empty())
       << "config/laser-features.yaml lacks " << ::testing::PrintToString(table.missingFrom(file.root()["laser_features"]));
-  LaserFeatureConfig loaded = loadLaserFeatureConfig(source("config/laser-features.yaml"));
+  LaserFeatureConfig loaded = loadLaserFeatureConfig(sourcePath("config/laser-features.yaml"));
   ParameterTable loaded_table;
   describeLaserFeatures(loaded_table, loaded);
   EXPECT_EQ(loaded_table.yaml(), table.yaml()) << "a value differs from its default";

@@ -13,6 +13,7 @@
 #include <limits>
 #include <random>
 
+#include "source_path.hpp"
 #include "eval/ate.hpp"
 #include "pipeline/feature_slam_estimator.hpp"
 #include "sim/simulator.hpp"
@@ -20,11 +21,11 @@
 namespace polarslam {
 namespace {
 
-std::string source(const std::string& rel) { return std::string(POLARSLAM_SOURCE_DIR) + "/" + rel; }
+using testing::sourcePath;
 
 TEST(FeaturePipelineConfig, TheShippedFileHoldsTheDefaultsOfTheDefaultRobot) {
-  const FeaturePipelineConfig file = loadFeaturePipelineConfig(source("config/ekf.yaml"), SlamSensors::Fused);
-  const FeaturePipelineConfig robot = loadFeaturePipelineConfig(source("config/robots/default.yaml"), SlamSensors::Fused);
+  const FeaturePipelineConfig file = loadFeaturePipelineConfig(sourcePath("config/ekf.yaml"), SlamSensors::Fused);
+  const FeaturePipelineConfig robot = loadFeaturePipelineConfig(sourcePath("config/robots/default.yaml"), SlamSensors::Fused);
   const FeaturePipelineConfig defaults;
   EXPECT_EQ(file.slam.association.gate_probability, defaults.slam.association.gate_probability);
   EXPECT_EQ(file.slam.new_feature_probability, defaults.slam.new_feature_probability);
@@ -95,7 +96,7 @@ struct SimulatedRun : SimSink {
 const SimulatedRun& officeRun() {
   static const SimulatedRun run = [] {
     SimulatedRun r;
-    Simulator sim(loadWorld(source("config/worlds/office.yaml")), loadRobotDescription(source("config/robots/default.yaml")), 5);
+    Simulator sim(loadWorld(sourcePath("config/worlds/office.yaml")), loadRobotDescription(sourcePath("config/robots/default.yaml")), 5);
     while (sim.time() < 60.0 && !sim.finished()) sim.step(r);
     return r;
   }();
@@ -110,8 +111,8 @@ std::vector<PoseStamped> inStartFrame(std::vector<PoseStamped> poses) {
 
 TEST(LaserFeatureStage, FusedSensorsBreakLaserSegmentsWhereTheSonarSawCornersAndEdges) {
   const SimulatedRun& run = officeRun();
-  const FeaturePipelineConfig fused = loadFeaturePipelineConfig(source("config/ekf.yaml"), SlamSensors::Fused);
-  const FeaturePipelineConfig laser_only = loadFeaturePipelineConfig(source("config/ekf.yaml"), SlamSensors::Laser);
+  const FeaturePipelineConfig fused = loadFeaturePipelineConfig(sourcePath("config/ekf.yaml"), SlamSensors::Fused);
+  const FeaturePipelineConfig laser_only = loadFeaturePipelineConfig(sourcePath("config/ekf.yaml"), SlamSensors::Laser);
   LaserFeatureStage with_hints(fused), without(laser_only);
   EXPECT_TRUE(with_hints.usesSonar());
   EXPECT_FALSE(without.usesSonar());
@@ -137,7 +138,7 @@ TEST(LaserFeatureStage, FusedSensorsBreakLaserSegmentsWhereTheSonarSawCornersAnd
 
 TEST(FeatureSlamEstimator, FinalTrajectoryIsRegeneratedInTheFinalMapOnePosePerScan) {
   const SimulatedRun& run = officeRun();
-  FeatureSlamEstimator ekf(loadFeaturePipelineConfig(source("config/ekf.yaml"), SlamSensors::Fused));
+  FeatureSlamEstimator ekf(loadFeaturePipelineConfig(sourcePath("config/ekf.yaml"), SlamSensors::Fused));
   for (const auto& event : run.events) event(ekf);
   nlohmann::json report;
   ekf.finish("", report);
@@ -257,7 +258,7 @@ double largestDifference(const std::vector<PoseStamped>& a, const std::vector<Po
 // max_*_lag_s) makes the stages go on without it, counted.
 TEST(FeatureSlamEstimator, StagesApartGiveTheOneProcessResultWhateverTheLagOfTheFeatureStreams) {
   const SimulatedRun& run = officeRun();
-  const FeaturePipelineConfig config = loadFeaturePipelineConfig(source("config/ekf.yaml"), SlamSensors::Fused);
+  const FeaturePipelineConfig config = loadFeaturePipelineConfig(sourcePath("config/ekf.yaml"), SlamSensors::Fused);
   FeatureSlamEstimator ekf(config);
   for (const auto& event : run.events) event(ekf);
   nlohmann::json report;

@@ -4,10 +4,11 @@
 #include <vector>
 
 #include "sim/simulator.hpp"
+#include "source_path.hpp"
 
 namespace polarslam::test {
 
-inline std::string sourcePath(const std::string& relative) { return std::string(POLARSLAM_SOURCE_DIR) + "/" + relative; }
+using testing::sourcePath;
 
 /// Keeps every event, plus one line per event in emission order (for determinism checks).
 struct RecordingSink : SimSink {

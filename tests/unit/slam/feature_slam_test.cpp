@@ -16,7 +16,7 @@ namespace polarslam {
 namespace {
 
 using testing::SyntheticNoise;
-using testing::SyntheticRun;
+using testing::CircleRun;
 using testing::SyntheticWorld;
 
 struct RunResult {
@@ -28,7 +28,7 @@ struct RunResult {
 /// One run: odometry at 50 Hz, features at 10 Hz, for `seconds`.
 RunResult runSynthetic(uint64_t seed, double seconds, const FeatureSlamParams& params = {}) {
   const SyntheticWorld world = testing::roomWorld();
-  SyntheticRun run(world, SyntheticNoise{}, seed);
+  CircleRun run(world, SyntheticNoise{}, seed);
   RunResult result{{}, {}, FeatureSlam(params)};
   FeatureSlam& slam = result.slam;
   std::map<int64_t, Pose2> truth_at;
@@ -45,7 +45,7 @@ RunResult runSynthetic(uint64_t seed, double seconds, const FeatureSlamParams& p
   for (const PoseStamped& p : slam.takePoses()) {
     const auto it = truth_at.find(p.utime);
     if (it == truth_at.end()) continue;
-    const int step = static_cast<int>((p.utime - SyntheticRun::kStart) / SyntheticRun::kOdometryPeriod);
+    const int step = static_cast<int>((p.utime - CircleRun::kStart) / CircleRun::kOdometryPeriod);
     if (step < 50 || step % 10 != 0) continue;
     result.nees.push_back(poseNees(p.pose, p.cov, it->second));
     result.truth.push_back(it->second);
@@ -249,7 +249,7 @@ TEST(FeatureSlam, ScanAnchorsDescribeTheMapFromThePoseAtTheScan) {
 
 TEST(FeatureSlam, AnchorRequestsAreAnsweredInTimeOrder) {
   const SyntheticWorld world = testing::roomWorld();
-  SyntheticRun run(world, SyntheticNoise{}, 5);
+  CircleRun run(world, SyntheticNoise{}, 5);
   FeatureSlam slam;
   slam.addOdometry(run.initialOdometry());
   std::vector<int64_t> requested;

@@ -46,9 +46,9 @@ struct SyntheticNoise {
 
 /// The robot starts at the origin facing +x and drives a left-hand circle of radius `radius` at
 /// speed `speed`.
-class SyntheticRun {
+class CircleRun {
  public:
-  SyntheticRun(const SyntheticWorld& world, const SyntheticNoise& noise, uint64_t seed, double radius = 2.5,
+  CircleRun(const SyntheticWorld& world, const SyntheticNoise& noise, uint64_t seed, double radius = 2.5,
                double speed = 0.5)
       : world_(world), noise_(noise), rng_(seed), radius_(radius), speed_(speed) {}
 
