@@ -249,13 +249,13 @@ void collectGroupNames(const GroupSpec& group, std::vector<std::string>& out) {
   for (const auto& sub : group.groups) collectGroupNames(sub, out);
 }
 
+}  // namespace
+
 std::string joined(const std::vector<std::string>& words) {
   std::string out;
   for (const auto& w : words) out += (out.empty() ? "" : ", ") + w;
   return out;
 }
-
-}  // namespace
 
 double RestartBackoff::delay(int consecutive_crashes) const {
   const double d = initial_s * std::pow(factor, std::max(0, consecutive_crashes - 1));

@@ -64,6 +64,9 @@ std::vector<CommandSpec> selectCommands(const GroupSpec& root, const std::string
 /// Replaces `${NAME}` from `vars`; throws "WHERE: unknown variable ${NAME}" otherwise.
 std::string expandVariables(const std::string& text, const Environment& vars, const std::string& where);
 
+/// "a, b, c": names in a message.
+std::string joined(const std::vector<std::string>& words);
+
 /// "SIGINT", "INT", "int" or "2" → 2; -1 when not a signal a process can be stopped with.
 int parseSignal(const std::string& text);
 /// "SIGINT" for 2.

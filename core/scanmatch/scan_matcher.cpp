@@ -98,7 +98,6 @@ struct ObservableSpace {
   }
 };
 
-
 }  // namespace
 
 const char* statusText(MatchStatus status) {

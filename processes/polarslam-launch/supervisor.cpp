@@ -81,12 +81,9 @@ bool Supervisor::finished() const { return !table_.anyActive() && ending_.empty(
 
 void Supervisor::startDue(LaunchClock::time_point now) {
   for (size_t i : table_.dueToStart(now)) {
-    if (const auto late = table_.awaited(i); !late.empty() && table_[i].state == RunState::Scheduled) {
-      std::string names;
-      for (const auto& name : late) names += (names.empty() ? "" : ", ") + name;
-      event(table_[i].spec.name + ": " + names + " did not report running within wait_timeout (" +
+    if (const auto late = table_.awaited(i); !late.empty() && table_[i].state == RunState::Scheduled)
+      event(table_[i].spec.name + ": " + joined(late) + " did not report running within wait_timeout (" +
             seconds(table_[i].spec.wait_timeout_s) + "): starting it anyway");
-    }
     start(i, now);
   }
 }
