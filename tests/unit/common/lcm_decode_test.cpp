@@ -8,13 +8,6 @@
 
 #include "common/lcm_decode.hpp"
 #include "common/lcm_log.hpp"
-#include "polarslam/features_t.hpp"
-#include "polarslam/laser_scan_t.hpp"
-#include "polarslam/path_t.hpp"
-#include "polarslam/pose_graph_t.hpp"
-#include "polarslam/process_status_t.hpp"
-#include "polarslam/pose_t.hpp"
-#include "polarslam/sonar_targets_t.hpp"
 
 namespace polarslam {
 namespace {
@@ -175,6 +168,142 @@ TEST(LcmDecode, PathGraphAndStatusCountsAreCheckedAgainstTheirBytes) {
     putCount(sbuf, kinds_at, count);
     EXPECT_FALSE(decodeLcm(sout, sbuf.data(), sbuf.size())) << count;
   }
+}
+
+// The break hints sit after num_rejected, last in features_t: the count the fuzzer found claiming
+// gigabytes (CI run of stop 31) is refused.
+TEST(LcmDecode, FeatureBreakHintCountIsChecked) {
+  features_t features{};
+  features.frame = "laser";
+  features.num_break_hints = 2;
+  features.break_hints = {0.25, 0.5};
+  std::vector<uint8_t> buf = encode(features);
+  features_t out{};
+  ASSERT_TRUE(decodeLcm(out, buf.data(), buf.size()));
+  EXPECT_EQ(out.break_hints.at(1), 0.5);
+  const size_t hints_at = buf.size() - 2 * 8 - 4;
+  ASSERT_EQ(getCount(buf, hints_at), 2u);
+  for (const uint32_t count : {3u, 0x7fffffffu, 0x80000000u}) {
+    putCount(buf, hints_at, count);
+    EXPECT_FALSE(decodeLcm(out, buf.data(), buf.size())) << count;
+  }
+}
+
+/// A valid message decodes; the same bytes one short or one long do not (the layout walk of its type
+/// must end exactly at its last byte, which checks the walk itself against lcm-gen's encoding).
+template <typename MsgT>
+void expectLayoutMatchesEncoding(const MsgT& msg) {
+  std::vector<uint8_t> buf = encode(msg);
+  MsgT out{};
+  EXPECT_TRUE(decodeLcm(out, buf.data(), buf.size())) << MsgT::getTypeName();
+  EXPECT_EQ(out.getEncodedSize(), msg.getEncodedSize()) << MsgT::getTypeName();
+  EXPECT_FALSE(decodeLcm(out, buf.data(), buf.size() - 1)) << MsgT::getTypeName() << " one byte short";
+  buf.push_back(0);
+  EXPECT_FALSE(decodeLcm(out, buf.data(), buf.size())) << MsgT::getTypeName() << " one byte long";
+  EXPECT_FALSE(decodeLcm(out, buf.data(), 0)) << MsgT::getTypeName() << " empty";
+}
+
+TEST(LcmDecode, EveryDecodedTypesLayoutMatchesItsEncoding) {
+  laser_scan_t scan{};
+  scan.num_ranges = 2;
+  scan.ranges = {1.0f, 2.0f};
+  expectLayoutMatchesEncoding(scan);
+  expectLayoutMatchesEncoding(odometry_t{});
+  sonar_targets_t sonar{};
+  sonar.num_targets = 1;
+  sonar.targets.resize(1);
+  expectLayoutMatchesEncoding(sonar);
+  pose_t pose{};
+  pose.frame = "map";
+  expectLayoutMatchesEncoding(pose);
+  features_t features{};
+  features.frame = "base";
+  features.num_lines = 1;
+  features.lines.resize(1);
+  features.num_corners = 2;
+  features.corners.resize(2);
+  features.num_points = 1;
+  features.points.resize(1);
+  features.num_break_hints = 1;
+  features.break_hints = {0.1};
+  expectLayoutMatchesEncoding(features);
+  grid_map_t grid{};
+  grid.frame = "map";
+  grid.source = "ekf-anchors";
+  grid.num_bytes = 3;
+  grid.data = {1, 2, 3};
+  expectLayoutMatchesEncoding(grid);
+  slam_map_t map{};
+  map.robot.frame = "map";
+  map.num_features = 2;
+  map.features.resize(2);
+  expectLayoutMatchesEncoding(map);
+  scan_anchors_t anchors{};
+  anchors.pose.frame = "map";
+  anchors.num_anchors = 1;
+  anchors.anchors.resize(1);
+  expectLayoutMatchesEncoding(anchors);
+  path_t path{};
+  path.frame = "map";
+  path.num_poses = 1;
+  path.pose_utime = {1};
+  path.x = path.y = path.theta = {0.5};
+  path.source = {1};
+  expectLayoutMatchesEncoding(path);
+  pose_graph_t graph{};
+  graph.frame = "map";
+  graph.num_nodes = 1;
+  graph.node_id = graph.node_utime = {1};
+  graph.node_pose = {{0.0, 0.0, 0.0}};
+  graph.num_edges = 1;
+  graph.edge_from = graph.edge_to = {1};
+  graph.edge_kind = {1};
+  graph.edge_active = {true};
+  graph.edge_measurement = {{0.0, 0.0, 0.0}};
+  graph.edge_cov = {std::vector<double>(9, 0.0)};
+  expectLayoutMatchesEncoding(graph);
+  process_status_t status{};
+  status.name = "polarslam-grid";
+  status.host = "robot";
+  status.state = "running";
+  status.num_reject_kinds = 2;
+  status.reject_kinds = {"a", "bc"};
+  status.reject_counts = {1, 2};
+  expectLayoutMatchesEncoding(status);
+  scan_match_t match{};
+  match.method = "psm";
+  match.status = "converged";
+  expectLayoutMatchesEncoding(match);
+  grid_request_t request{};
+  request.out_dir = "/tmp/maps";
+  expectLayoutMatchesEncoding(request);
+  grid_status_t grid_status{};
+  grid_status.state = "idle";
+  grid_status.out_dir = "/tmp";
+  grid_status.plan_state = "none";
+  expectLayoutMatchesEncoding(grid_status);
+  expectLayoutMatchesEncoding(anchored_pose_t{});
+  expectLayoutMatchesEncoding(goal_t{});
+  expectLayoutMatchesEncoding(map_request_t{});
+}
+
+TEST(LcmDecode, NestedPoseFrameAndAnchorCountsAreChecked) {
+  scan_anchors_t anchors{};
+  anchors.pose.frame = "map";
+  anchors.num_anchors = 1;
+  anchors.anchors.resize(1);
+  std::vector<uint8_t> buf = encode(anchors);
+  scan_anchors_t out{};
+  ASSERT_TRUE(decodeLcm(out, buf.data(), buf.size()));
+  const size_t frame_at = 8 + 2 * 8 + 2 * 8;  // hash, utime seq, the pose's utime seq
+  ASSERT_EQ(getCount(buf, frame_at), 4u);
+  putCount(buf, frame_at, 0x80000000u);  // INT_MIN: lcm-gen computes INT_MIN - 1
+  EXPECT_FALSE(decodeLcm(out, buf.data(), buf.size()));
+  putCount(buf, frame_at, 4u);
+  const size_t anchors_at = frame_at + 4 + 4 + 12 * 8;
+  ASSERT_EQ(getCount(buf, anchors_at), 1u);
+  putCount(buf, anchors_at, 0x10000000u);
+  EXPECT_FALSE(decodeLcm(out, buf.data(), buf.size()));
 }
 
 }  // namespace
