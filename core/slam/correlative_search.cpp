@@ -1,7 +1,9 @@
 #include "slam/correlative_search.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <queue>
 
@@ -33,33 +35,53 @@ std::vector<uint8_t> poolMax(const std::vector<uint8_t>& finer, int width, int h
   return coarser;
 }
 
-/// Items by an integer key in [0, max_key], highest first: a bucket per key, so that adding one and
-/// taking the best cost O(1) (a heap of the millions of nodes a search holds spends its time in
-/// cache misses). Items of equal key come out last in, first out.
+/// Items by an integer key in [min_key, max_key], highest first: a bucket per key, so that adding one
+/// and taking the best cost O(1) (a heap of the millions of nodes a search holds spends its time in
+/// cache misses). Items of equal key come out last in, first out. A bit per bucket marks the ones
+/// holding items, so that finding the next key down skips 64 empty buckets at a time.
 template <typename T>
 class BucketQueue {
  public:
-  explicit BucketQueue(int max_key) : buckets_(static_cast<size_t>(max_key) + 1) {}
+  BucketQueue(int min_key, int max_key)
+      : min_key_(min_key),
+        buckets_(static_cast<size_t>(std::max(max_key - min_key + 1, 0))),
+        held_((buckets_.size() + 63) / 64, 0) {}
+  /// `key` must lie in [min_key, max_key].
   void push(int key, const T& item) {
-    buckets_[static_cast<size_t>(key)].push_back(item);
-    top_ = std::max(top_, key);
+    const size_t b = static_cast<size_t>(key - min_key_);
+    buckets_[b].push_back(item);
+    held_[b / 64] |= uint64_t{1} << (b % 64);
+    top_ = std::max(top_, static_cast<long>(b));
   }
   /// The highest key held, or -1 when empty.
   int topKey() {
-    while (top_ >= 0 && buckets_[static_cast<size_t>(top_)].empty()) --top_;
-    return top_;
+    while (top_ >= 0) {
+      const size_t word = static_cast<size_t>(top_) / 64;
+      const uint64_t below = held_[word] & (~uint64_t{0} >> (63 - static_cast<size_t>(top_) % 64));
+      if (below != 0) {
+        top_ = static_cast<long>(word * 64) + 63 - std::countl_zero(below);
+        return static_cast<int>(top_) + min_key_;
+      }
+      top_ = static_cast<long>(word * 64) - 1;
+    }
+    return -1;
   }
   /// An item of the highest key; only when not empty.
   T pop() {
-    std::vector<T>& bucket = buckets_[static_cast<size_t>(topKey())];
+    topKey();
+    const size_t b = static_cast<size_t>(top_);
+    std::vector<T>& bucket = buckets_[b];
     const T item = bucket.back();
     bucket.pop_back();
+    if (bucket.empty()) held_[b / 64] &= ~(uint64_t{1} << (b % 64));
     return item;
   }
 
  private:
+  int min_key_;
   std::vector<std::vector<T>> buckets_;
-  int top_ = -1;
+  std::vector<uint64_t> held_;  ///< bit b % 64 of word b / 64: bucket b holds items
+  long top_ = -1;               ///< no bucket above this one holds items
 };
 
 }  // namespace
@@ -267,15 +289,16 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
   // of cell values.
   const int points_count = static_cast<int>(usable.size());
   const auto score_of = [&](int sum) { return sum / (kScoreScale * points_count); };
-  BucketQueue<Node> open(static_cast<int>(kScoreScale) * points_count);
+  const int perfect = static_cast<int>(kScoreScale) * points_count;
   // The largest shortfall of a node's sum from a perfect one that still scores `threshold`.
   const auto allowed_deficit = [&](double threshold) {
-    const int perfect = static_cast<int>(kScoreScale) * points_count;
     int deficit = static_cast<int>(std::clamp(std::floor((1.0 - threshold) * perfect), -1.0, static_cast<double>(perfect)));
     while (deficit >= 0 && score_of(perfect - deficit) < threshold) --deficit;
     while (deficit < perfect && score_of(perfect - deficit - 1) >= threshold) ++deficit;
     return deficit;
   };
+  // Only nodes scoring at least min_score are ever queued (the threshold never falls below it).
+  BucketQueue<Node> open(perfect - allowed_deficit(query.min_score), perfect);
   double threshold = std::max(query.min_score, query.best_at_least);
   int max_deficit = allowed_deficit(threshold);
   bool setting_aside = threshold > query.min_score;
