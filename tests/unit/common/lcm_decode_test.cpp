@@ -58,11 +58,82 @@ uint32_t getCount(const std::vector<uint8_t>& buf, size_t pos) {
   return (uint32_t{buf[pos]} << 24) | (uint32_t{buf[pos + 1]} << 16) | (uint32_t{buf[pos + 2]} << 8) | buf[pos + 3];
 }
 
-TEST(LcmDecode, HugeOrNegativeLaserCountIsRejectedBeforeAllocating) {
+/// Messages the tests below take apart, each with its arrays and strings filled.
+laser_scan_t threeBeamScan() {
   laser_scan_t scan{};
   scan.num_ranges = 3;
   scan.ranges = {1.0f, 2.0f, 3.0f};
-  std::vector<uint8_t> buf = encode(scan);
+  return scan;
+}
+
+sonar_targets_t twoTargetSonar() {
+  sonar_targets_t sonar{};
+  sonar.num_targets = 2;
+  sonar.targets.resize(2);
+  sonar.targets[1].range = 1.5;
+  return sonar;
+}
+
+/// A line, a corner and two points; no break hints.
+features_t featuresOfEachKind() {
+  features_t features{};
+  features.frame = "laser";
+  features.num_lines = 1;
+  features.lines.resize(1);
+  features.lines[0].d = 2.0;
+  features.num_corners = 1;
+  features.corners.resize(1);
+  features.num_points = 2;
+  features.points.resize(2);
+  features.points[1].x = -0.5;
+  features.num_rejected = 3;
+  return features;
+}
+
+path_t twoPosePath() {
+  path_t path{};
+  path.frame = "map";
+  path.num_poses = 2;
+  path.pose_utime = {1, 2};
+  path.x = {0.0, 1.0};
+  path.y = {0.0, 2.0};
+  path.theta = {0.0, 0.0};
+  path.source = {3, 3};
+  return path;
+}
+
+/// One node, no edges.
+pose_graph_t oneNodeGraph() {
+  pose_graph_t graph{};
+  graph.frame = "map";
+  graph.num_nodes = 1;
+  graph.node_id = {7};
+  graph.node_utime = {8};
+  graph.node_pose = {{1.0, 2.0, 3.0}};
+  return graph;
+}
+
+process_status_t statusWithOneRejectKind() {
+  process_status_t status{};
+  status.name = "a";
+  status.host = "b";
+  status.state = "running";
+  status.num_reject_kinds = 1;
+  status.reject_kinds = {"laser: NaN range"};
+  status.reject_counts = {5};
+  return status;
+}
+
+scan_anchors_t oneAnchorMessage() {
+  scan_anchors_t anchors{};
+  anchors.pose.frame = "map";
+  anchors.num_anchors = 1;
+  anchors.anchors.resize(1);
+  return anchors;
+}
+
+TEST(LcmDecode, HugeOrNegativeLaserCountIsRejectedBeforeAllocating) {
+  std::vector<uint8_t> buf = encode(threeBeamScan());
   laser_scan_t out{};
   ASSERT_TRUE(decodeLcm(out, buf.data(), buf.size()));
   ASSERT_EQ(out.ranges.size(), 3u);
@@ -77,11 +148,7 @@ TEST(LcmDecode, HugeOrNegativeLaserCountIsRejectedBeforeAllocating) {
 }
 
 TEST(LcmDecode, SonarAndFeatureCountsAreChecked) {
-  sonar_targets_t sonar{};
-  sonar.num_targets = 2;
-  sonar.targets.resize(2);
-  sonar.targets[1].range = 1.5;
-  std::vector<uint8_t> sbuf = encode(sonar);
+  std::vector<uint8_t> sbuf = encode(twoTargetSonar());
   sonar_targets_t sout{};
   ASSERT_TRUE(decodeLcm(sout, sbuf.data(), sbuf.size()));
   EXPECT_EQ(sout.targets.at(1).range, 1.5);
@@ -90,18 +157,7 @@ TEST(LcmDecode, SonarAndFeatureCountsAreChecked) {
   putCount(sbuf, targets_at, 0x40000000u);
   EXPECT_FALSE(decodeLcm(sout, sbuf.data(), sbuf.size()));
 
-  features_t features{};
-  features.frame = "laser";
-  features.num_lines = 1;
-  features.lines.resize(1);
-  features.lines[0].d = 2.0;
-  features.num_corners = 1;
-  features.corners.resize(1);
-  features.num_points = 2;
-  features.points.resize(2);
-  features.points[1].x = -0.5;
-  features.num_rejected = 3;
-  std::vector<uint8_t> fbuf = encode(features);
+  std::vector<uint8_t> fbuf = encode(featuresOfEachKind());
   features_t fout{};
   ASSERT_TRUE(decodeLcm(fout, fbuf.data(), fbuf.size()));
   EXPECT_EQ(fout.frame, "laser");
@@ -118,15 +174,7 @@ TEST(LcmDecode, SonarAndFeatureCountsAreChecked) {
 // The types polarslam-bridge reads besides the sensor ones: a count that claims more than the
 // bytes hold is refused before lcm-gen's decode() allocates for it.
 TEST(LcmDecode, PathGraphAndStatusCountsAreCheckedAgainstTheirBytes) {
-  path_t path{};
-  path.frame = "map";
-  path.num_poses = 2;
-  path.pose_utime = {1, 2};
-  path.x = {0.0, 1.0};
-  path.y = {0.0, 2.0};
-  path.theta = {0.0, 0.0};
-  path.source = {3, 3};
-  std::vector<uint8_t> pbuf = encode(path);
+  std::vector<uint8_t> pbuf = encode(twoPosePath());
   path_t pout{};
   ASSERT_TRUE(decodeLcm(pout, pbuf.data(), pbuf.size()));
   EXPECT_EQ(pout.y.at(1), 2.0);
@@ -135,13 +183,7 @@ TEST(LcmDecode, PathGraphAndStatusCountsAreCheckedAgainstTheirBytes) {
   putCount(pbuf, poses_at, 0x7ffffff0u);
   EXPECT_FALSE(decodeLcm(pout, pbuf.data(), pbuf.size()));
 
-  pose_graph_t graph{};
-  graph.frame = "map";
-  graph.num_nodes = 1;
-  graph.node_id = {7};
-  graph.node_utime = {8};
-  graph.node_pose = {{1.0, 2.0, 3.0}};
-  std::vector<uint8_t> gbuf = encode(graph);
+  std::vector<uint8_t> gbuf = encode(oneNodeGraph());
   pose_graph_t gout{};
   ASSERT_TRUE(decodeLcm(gout, gbuf.data(), gbuf.size()));
   EXPECT_EQ(gout.node_pose.at(0)[2], 3.0);
@@ -150,14 +192,7 @@ TEST(LcmDecode, PathGraphAndStatusCountsAreCheckedAgainstTheirBytes) {
   putCount(gbuf, edges_at, 1000u);
   EXPECT_FALSE(decodeLcm(gout, gbuf.data(), gbuf.size()));
 
-  process_status_t status{};
-  status.name = "a";
-  status.host = "b";
-  status.state = "running";
-  status.num_reject_kinds = 1;
-  status.reject_kinds = {"laser: NaN range"};
-  status.reject_counts = {5};
-  std::vector<uint8_t> sbuf = encode(status);
+  std::vector<uint8_t> sbuf = encode(statusWithOneRejectKind());
   process_status_t sout{};
   ASSERT_TRUE(decodeLcm(sout, sbuf.data(), sbuf.size()));
   EXPECT_EQ(sout.reject_kinds.at(0), "laser: NaN range");
@@ -204,26 +239,13 @@ void expectLayoutMatchesEncoding(const MsgT& msg) {
 }
 
 TEST(LcmDecode, EveryDecodedTypesLayoutMatchesItsEncoding) {
-  laser_scan_t scan{};
-  scan.num_ranges = 2;
-  scan.ranges = {1.0f, 2.0f};
-  expectLayoutMatchesEncoding(scan);
+  expectLayoutMatchesEncoding(threeBeamScan());
   expectLayoutMatchesEncoding(odometry_t{});
-  sonar_targets_t sonar{};
-  sonar.num_targets = 1;
-  sonar.targets.resize(1);
-  expectLayoutMatchesEncoding(sonar);
+  expectLayoutMatchesEncoding(twoTargetSonar());
   pose_t pose{};
   pose.frame = "map";
   expectLayoutMatchesEncoding(pose);
-  features_t features{};
-  features.frame = "base";
-  features.num_lines = 1;
-  features.lines.resize(1);
-  features.num_corners = 2;
-  features.corners.resize(2);
-  features.num_points = 1;
-  features.points.resize(1);
+  features_t features = featuresOfEachKind();
   features.num_break_hints = 1;
   features.break_hints = {0.1};
   expectLayoutMatchesEncoding(features);
@@ -238,37 +260,20 @@ TEST(LcmDecode, EveryDecodedTypesLayoutMatchesItsEncoding) {
   map.num_features = 2;
   map.features.resize(2);
   expectLayoutMatchesEncoding(map);
-  scan_anchors_t anchors{};
-  anchors.pose.frame = "map";
-  anchors.num_anchors = 1;
-  anchors.anchors.resize(1);
-  expectLayoutMatchesEncoding(anchors);
-  path_t path{};
-  path.frame = "map";
-  path.num_poses = 1;
-  path.pose_utime = {1};
-  path.x = path.y = path.theta = {0.5};
-  path.source = {1};
-  expectLayoutMatchesEncoding(path);
-  pose_graph_t graph{};
-  graph.frame = "map";
-  graph.num_nodes = 1;
-  graph.node_id = graph.node_utime = {1};
-  graph.node_pose = {{0.0, 0.0, 0.0}};
+  expectLayoutMatchesEncoding(oneAnchorMessage());
+  expectLayoutMatchesEncoding(twoPosePath());
+  pose_graph_t graph = oneNodeGraph();
   graph.num_edges = 1;
-  graph.edge_from = graph.edge_to = {1};
+  graph.edge_from = graph.edge_to = {7};
   graph.edge_kind = {1};
   graph.edge_active = {true};
   graph.edge_measurement = {{0.0, 0.0, 0.0}};
   graph.edge_cov = {std::vector<double>(9, 0.0)};
   expectLayoutMatchesEncoding(graph);
-  process_status_t status{};
-  status.name = "polarslam-grid";
-  status.host = "robot";
-  status.state = "running";
+  process_status_t status = statusWithOneRejectKind();  // two kinds: the layout walks a list of strings
   status.num_reject_kinds = 2;
-  status.reject_kinds = {"a", "bc"};
-  status.reject_counts = {1, 2};
+  status.reject_kinds.push_back("bc");
+  status.reject_counts.push_back(2);
   expectLayoutMatchesEncoding(status);
   scan_match_t match{};
   match.method = "psm";
@@ -288,11 +293,7 @@ TEST(LcmDecode, EveryDecodedTypesLayoutMatchesItsEncoding) {
 }
 
 TEST(LcmDecode, NestedPoseFrameAndAnchorCountsAreChecked) {
-  scan_anchors_t anchors{};
-  anchors.pose.frame = "map";
-  anchors.num_anchors = 1;
-  anchors.anchors.resize(1);
-  std::vector<uint8_t> buf = encode(anchors);
+  std::vector<uint8_t> buf = encode(oneAnchorMessage());
   scan_anchors_t out{};
   ASSERT_TRUE(decodeLcm(out, buf.data(), buf.size()));
   const size_t frame_at = 8 + 2 * 8 + 2 * 8;  // hash, utime seq, the pose's utime seq
