@@ -2,17 +2,14 @@
 
 #include <algorithm>
 #include <limits>
-#include <sstream>
+#include <string>
 
 namespace polarslam {
 
 std::string validateScan(const LaserScan& scan) {
-  std::ostringstream why;
   if (scan.ranges.empty()) return "empty scan";
-  if (scan.ranges.size() > kMaxLaserBeams) {
-    why << "too many beams (" << scan.ranges.size() << " > " << kMaxLaserBeams << ")";
-    return why.str();
-  }
+  if (scan.ranges.size() > kMaxLaserBeams)
+    return "too many beams (" + std::to_string(scan.ranges.size()) + " > " + std::to_string(kMaxLaserBeams) + ")";
   if (!std::isfinite(scan.angle_min) || !std::isfinite(scan.angle_increment) ||
       scan.angle_increment == 0.0)
     return "invalid angle_min/angle_increment";

@@ -48,6 +48,9 @@ double foldedDirection(double dx, double dy) {
 }
 
 double foldAngle(double a) {
+  // The usual case, an angle in [0, 2π), without fmod (a tenth of a microsecond each): for a in
+  // [π, 2π) the subtraction is exact (Sterbenz), so the result is fmod's.
+  if (a >= 0.0 && a < 2.0 * std::numbers::pi) return a >= std::numbers::pi ? a - std::numbers::pi : a;
   a = std::fmod(a, std::numbers::pi);
   return a < 0.0 ? a + std::numbers::pi : a;
 }

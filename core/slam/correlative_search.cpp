@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <queue>
 
@@ -110,36 +111,45 @@ CorrelativeMapSearch::CorrelativeMapSearch(const std::vector<Vec2>& map_points,
   height_ = static_cast<int>(std::ceil((hi.y() - lo.y() + 2.0 * margin) / res)) + 1;
   const size_t cells = static_cast<size_t>(width_) * static_cast<size_t>(height_);
 
-  // Both rasters stamp a disc around each point: the score grid exp(-d²/2σ²) out to 3σ, the
-  // region the reference positions' discs. The value of a cell is looked up by d², finely binned.
+  // Both rasters are a value per cell by its distance to the nearest of a set of points: the score
+  // grid exp(-d²/2σ²) out to 3σ, the region the reference positions' discs. The value is looked up
+  // by d², finely binned; the table falls with d², so the nearest point gives the largest value.
+  // Each point stamps its d² on the cells of its disc (a minimum, in a loop the compiler
+  // vectorises), then each cell takes its value once.
   constexpr int kBins = 4096;
-  auto stamp = [&](std::vector<uint8_t>& grid, const Vec2& p, double radius, const std::vector<uint8_t>& value_by_d2) {
-    const double cx = (p.x() - origin_.x()) / res, cy = (p.y() - origin_.y()) / res;
+  auto raster = [&](const std::vector<Vec2>& centres, double radius, const std::vector<uint8_t>& value_by_d2) {
     const double r2 = (radius / res) * (radius / res), bins_per_d2 = (kBins - 1) / r2;
     const int reach = static_cast<int>(std::ceil(radius / res)) + 1;
-    const int x0 = std::max(0, static_cast<int>(cx) - reach), x1 = std::min(width_ - 1, static_cast<int>(cx) + reach);
-    const int y0 = std::max(0, static_cast<int>(cy) - reach), y1 = std::min(height_ - 1, static_cast<int>(cy) + reach);
-    for (int y = y0; y <= y1; ++y) {
-      const double ey = y + 0.5 - cy;
-      uint8_t* row = &grid[static_cast<size_t>(y) * static_cast<size_t>(width_)];
-      for (int x = x0; x <= x1; ++x) {
-        const double ex = x + 0.5 - cx, d2 = ex * ex + ey * ey;
-        if (d2 > r2) continue;
-        row[x] = std::max(row[x], value_by_d2[static_cast<size_t>(d2 * bins_per_d2)]);
+    std::vector<double> nearest_d2(cells, std::numeric_limits<double>::infinity());
+    for (const Vec2& p : centres) {
+      const double cx = (p.x() - origin_.x()) / res, cy = (p.y() - origin_.y()) / res;
+      const int x0 = std::max(0, static_cast<int>(cx) - reach), x1 = std::min(width_ - 1, static_cast<int>(cx) + reach);
+      const int y0 = std::max(0, static_cast<int>(cy) - reach), y1 = std::min(height_ - 1, static_cast<int>(cy) + reach);
+      for (int y = y0; y <= y1; ++y) {
+        const double ey = y + 0.5 - cy;
+        double* row = &nearest_d2[static_cast<size_t>(y) * static_cast<size_t>(width_)];
+        for (int x = x0; x <= x1; ++x) {
+          const double ex = x + 0.5 - cx;
+          row[x] = std::min(row[x], ex * ex + ey * ey);
+        }
       }
     }
+    std::vector<uint8_t> grid(cells, 0);
+    for (size_t c = 0; c < cells; ++c)
+      if (nearest_d2[c] <= r2) grid[c] = value_by_d2[static_cast<size_t>(nearest_d2[c] * bins_per_d2)];
+    return grid;
   };
-  std::vector<uint8_t> score(cells, 0), region(cells, 0);
   const double sigma = params_.sigma, score_radius = 3.0 * sigma;
   std::vector<uint8_t> likelihood(kBins), inside(kBins, 1);
   for (int i = 0; i < kBins; ++i) {
     const double d2 = score_radius * score_radius * i / (kBins - 1);  // in m²
     likelihood[static_cast<size_t>(i)] = static_cast<uint8_t>(std::lround(kScoreScale * std::exp(-0.5 * d2 / (sigma * sigma))));
   }
-  for (const Vec2& p : finite_points) stamp(score, p, score_radius, likelihood);
+  std::vector<uint8_t> score = raster(finite_points, score_radius, likelihood);
   // A robot position is a cell corner (origin + cell · resolution): shift by half a cell.
-  for (const Vec2& p : finite_references)
-    stamp(region, p + Vec2(0.5 * res, 0.5 * res), params_.region_radius, inside);
+  std::vector<Vec2> shifted_references;
+  for (const Vec2& p : finite_references) shifted_references.push_back(p + Vec2(0.5 * res, 0.5 * res));
+  std::vector<uint8_t> region = raster(shifted_references, params_.region_radius, inside);
   levels_.push_back(std::move(score));
   region_.push_back(std::move(region));
   // One score level more than nodes have: a node's headings widen the window its bound needs.
@@ -164,23 +174,25 @@ bool CorrelativeMapSearch::regionAllows(int level, int x, int y) const {
   return region_[static_cast<size_t>(level)][static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)] != 0;
 }
 
-int CorrelativeMapSearch::nodeSum(const HeadingGroup& group, int level, int x, int y, int max_deficit) const {
+int CorrelativeMapSearch::nodeSum(const HeadingGroups& groups, int group_index, int level, int x, int y,
+                                  int max_deficit) const {
+  const HeadingGroup& group = groups[static_cast<size_t>(group_index)];
   // The cells a point lands in over the node: its lowest cell plus the translations and the
   // group's extent. The smallest window holding them all gives the bound.
   int window_level = level;
   while ((1 << window_level) < (1 << level) + group.extent) ++window_level;
   const int scale = static_cast<int>(kScoreScale);
-  if (window_level >= static_cast<int>(levels_.size())) return scale * static_cast<int>(group.dx.size());
+  const size_t n = groups.points, begin = static_cast<size_t>(group_index) * n;
+  if (window_level >= static_cast<int>(levels_.size())) return scale * static_cast<int>(n);
   // Most nodes scored are pruned: once the points so far fall short of a perfect score by more
   // than max_deficit, the sum so far is returned (it is below what the node needs, as the whole is).
   constexpr size_t kBatch = 8;
-  const size_t n = group.dx.size();
   int sum = 0;
   if (x + group.min_dx >= 0 && y + group.min_dy >= 0 && x + group.max_dx < width_ && y + group.max_dy < height_) {
     // Every point lands in the grid (the usual case): no clamping.
     const uint8_t* base =
         &levels_[static_cast<size_t>(window_level)][static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
-    const std::ptrdiff_t* offsets = group.offsets.data();
+    const std::ptrdiff_t* offsets = &groups.offsets[begin];
     size_t i = 0;
     for (; i + kBatch <= n; i += kBatch) {
       for (size_t k = i; k < i + kBatch; ++k) sum += base[offsets[k]];
@@ -188,8 +200,10 @@ int CorrelativeMapSearch::nodeSum(const HeadingGroup& group, int level, int x, i
     }
     for (; i < n; ++i) sum += base[offsets[i]];
   } else {
+    const int* dx = &groups.dx[begin];
+    const int* dy = &groups.dy[begin];
     for (size_t i = 0; i < n; ++i) {
-      sum += cellValue(window_level, x + group.dx[i], y + group.dy[i]);
+      sum += cellValue(window_level, x + dx[i], y + dy[i]);
       if (scale * static_cast<int>(i + 1) - sum > max_deficit) return sum;
     }
   }
@@ -207,54 +221,75 @@ Pose2 CorrelativeMapSearch::poseOf(int heading, int headings, int x, int y) cons
                wrapAngle(2.0 * std::numbers::pi * heading / headings));
 }
 
-std::vector<CorrelativeMapSearch::HeadingGroup> CorrelativeMapSearch::headingGroups(const std::vector<Vec2>& points,
-                                                                                    int headings) const {
-  const auto finish = [&](HeadingGroup& group) {
-    for (size_t i = 0; i < group.dx.size(); ++i)
-      group.offsets.push_back(static_cast<std::ptrdiff_t>(group.dy[i]) * width_ + group.dx[i]);
-    group.min_dx = *std::min_element(group.dx.begin(), group.dx.end());
-    group.max_dx = *std::max_element(group.dx.begin(), group.dx.end());
-    group.min_dy = *std::min_element(group.dy.begin(), group.dy.end());
-    group.max_dy = *std::max_element(group.dy.begin(), group.dy.end());
+CorrelativeMapSearch::HeadingGroups CorrelativeMapSearch::headingGroups(const std::vector<Vec2>& points,
+                                                                       int headings) const {
+  HeadingGroups all;
+  const size_t n = points.size();
+  all.points = n;
+  std::vector<size_t> level_sizes{static_cast<size_t>(headings)};
+  while (level_sizes.back() > 1) level_sizes.push_back((level_sizes.back() + 1) / 2);
+  size_t total = 0;
+  for (const size_t count : level_sizes) total += count;
+  all.groups.resize(total);
+  all.dx.resize(total * n);
+  all.dy.resize(total * n);
+  all.offsets.resize(total * n);
+  const auto finish = [&](size_t g) {
+    HeadingGroup& group = all.groups[g];
+    const int* dx = &all.dx[g * n];
+    const int* dy = &all.dy[g * n];
+    std::ptrdiff_t* offsets = &all.offsets[g * n];
+    for (size_t i = 0; i < n; ++i) offsets[i] = static_cast<std::ptrdiff_t>(dy[i]) * width_ + dx[i];
+    group.min_dx = *std::min_element(dx, dx + n);
+    group.max_dx = *std::max_element(dx, dx + n);
+    group.min_dy = *std::min_element(dy, dy + n);
+    group.max_dy = *std::max_element(dy, dy + n);
   };
-  std::vector<HeadingGroup> groups(static_cast<size_t>(headings));
-  // Per group and point, the highest cell over the group's headings (the lowest is dx, dy).
-  std::vector<std::vector<int>> high_x(static_cast<size_t>(headings)), high_y(static_cast<size_t>(headings));
+  // Per group of the level below and of the one being built, and point: the highest cell over the
+  // group's headings (the lowest is dx, dy). A single heading's highest is its own.
+  std::vector<int> below_x(static_cast<size_t>(headings) * n), below_y(below_x.size()), high_x, high_y;
   for (int h = 0; h < headings; ++h) {
-    HeadingGroup& group = groups[static_cast<size_t>(h)];
-    group.first = h;
+    const size_t g = static_cast<size_t>(h);
+    all.groups[g].first = h;
     const double theta = 2.0 * std::numbers::pi * h / headings, c = std::cos(theta), s = std::sin(theta);
-    for (const Vec2& p : points) {
-      group.dx.push_back(static_cast<int>(std::floor((c * p.x() - s * p.y()) / params_.resolution)));
-      group.dy.push_back(static_cast<int>(std::floor((s * p.x() + c * p.y()) / params_.resolution)));
+    for (size_t i = 0; i < n; ++i) {
+      const Vec2& p = points[i];
+      below_x[g * n + i] = all.dx[g * n + i] = static_cast<int>(std::floor((c * p.x() - s * p.y()) / params_.resolution));
+      below_y[g * n + i] = all.dy[g * n + i] = static_cast<int>(std::floor((s * p.x() + c * p.y()) / params_.resolution));
     }
-    high_x[static_cast<size_t>(h)] = group.dx;
-    high_y[static_cast<size_t>(h)] = group.dy;
-    finish(group);
+    finish(g);
   }
-  for (size_t begin = 0, end = groups.size(); end - begin > 1; begin = end, end = groups.size()) {
-    for (size_t a = begin; a < end; a += 2) {
+  size_t begin = 0;
+  for (size_t k = 1; k < level_sizes.size(); ++k) {
+    const size_t end = begin + level_sizes[k - 1];
+    high_x.assign(level_sizes[k] * n, 0);
+    high_y.assign(level_sizes[k] * n, 0);
+    for (size_t a = begin, g = end; a < end; a += 2, ++g) {
       const size_t b = a + 1 < end ? a + 1 : a;  // an odd group out is its own parent's only child
-      HeadingGroup parent;
-      parent.level = groups[a].level + 1;
-      parent.first = groups[a].first;
+      HeadingGroup& parent = all.groups[g];
+      parent.level = all.groups[a].level + 1;
+      parent.first = all.groups[a].first;
       parent.children[0] = static_cast<int>(a);
       if (b != a) parent.children[1] = static_cast<int>(b);
-      std::vector<int> hx(points.size()), hy(points.size());
-      for (size_t i = 0; i < points.size(); ++i) {
-        parent.dx.push_back(std::min(groups[a].dx[i], groups[b].dx[i]));
-        parent.dy.push_back(std::min(groups[a].dy[i], groups[b].dy[i]));
-        hx[i] = std::max(high_x[a][i], high_x[b][i]);
-        hy[i] = std::max(high_y[a][i], high_y[b][i]);
-        parent.extent = std::max({parent.extent, hx[i] - parent.dx[i], hy[i] - parent.dy[i]});
+      const size_t ha = (a - begin) * n, hb = (b - begin) * n, hp = (g - end) * n;
+      for (size_t i = 0; i < n; ++i) {
+        const int dx = std::min(all.dx[a * n + i], all.dx[b * n + i]);
+        const int dy = std::min(all.dy[a * n + i], all.dy[b * n + i]);
+        const int hx = std::max(below_x[ha + i], below_x[hb + i]);
+        const int hy = std::max(below_y[ha + i], below_y[hb + i]);
+        all.dx[g * n + i] = dx;
+        all.dy[g * n + i] = dy;
+        high_x[hp + i] = hx;
+        high_y[hp + i] = hy;
+        parent.extent = std::max({parent.extent, hx - dx, hy - dy});
       }
-      finish(parent);
-      groups.push_back(std::move(parent));
-      high_x.push_back(std::move(hx));
-      high_y.push_back(std::move(hy));
+      finish(g);
     }
+    below_x.swap(high_x);
+    below_y.swap(high_y);
+    begin = end;
   }
-  return groups;
+  return all;
 }
 
 CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& points, const CorrelativeQuery& query) const {
@@ -271,7 +306,7 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
     }
   if (usable.empty()) return result;
   const int headings = std::max(1, static_cast<int>(std::ceil(2.0 * std::numbers::pi / headingStep(reach))));
-  const std::vector<HeadingGroup> groups = headingGroups(usable, headings);
+  const HeadingGroups groups = headingGroups(usable, headings);
   const int top = params_.levels - 1, span = 1 << top;
   // The root groups: those of the highest level whose points all move within a top node's span
   // (groups are stored level by level; a level's extents are at least those below it).
@@ -305,7 +340,7 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
   std::vector<Node> set_aside;  // scored below best_at_least before any place was found
   const auto consider = [&](int x, int y, int level, int group) {
     ++result.scored_nodes;
-    const int sum = nodeSum(groups[static_cast<size_t>(group)], level, x, y, max_deficit);
+    const int sum = nodeSum(groups, group, level, x, y, max_deficit);
     if (score_of(sum) >= threshold) open.push(sum, {x, y, level, group, sum});
     else if (setting_aside) set_aside.push_back({x, y, level, group, 0});
   };
@@ -317,6 +352,7 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
   // Leaves come out best first: the first of each place is its best pose. A node whose every pose
   // is near a place found already can add none: it is not expanded.
   const auto within_a_place = [&](const Node& node, const HeadingGroup& group) {
+    if (result.places.empty()) return false;
     const double first = 2.0 * std::numbers::pi * group.first / headings;
     const double turn = 2.0 * std::numbers::pi * (std::min(group.first + (1 << group.level), headings) - 1 - group.first) / headings;
     const double size = ((1 << node.level) - 1) * params_.resolution;

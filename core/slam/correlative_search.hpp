@@ -100,19 +100,28 @@ class CorrelativeMapSearch {
     int level = 0;
     int first = 0;
     int extent = 0;
-    std::vector<int> dx, dy;
-    std::vector<std::ptrdiff_t> offsets;  ///< dy · width + dx: into a level's cells
     int min_dx = 0, max_dx = 0, min_dy = 0, max_dy = 0;
     int children[2] = {-1, -1};
   };
-  /// Heading groups of every level for `points`: single headings first (group h is heading h),
-  /// each level pairing the one below, up to one group of all; `headings` is the count.
-  std::vector<HeadingGroup> headingGroups(const std::vector<Vec2>& points, int headings) const;
+  /// The groups of every level for a set of points: single headings first (group h is heading h),
+  /// each level pairing the one below, up to one group of all. Each group's per-point cells lie
+  /// in flat arrays (group g's at [g · points, (g + 1) · points)): a search builds thousands of
+  /// groups, and one allocation per array rather than per group.
+  struct HeadingGroups {
+    std::vector<HeadingGroup> groups;
+    size_t points = 0;
+    std::vector<int> dx, dy;
+    std::vector<std::ptrdiff_t> offsets;  ///< dy · width + dx: into a level's cells
+    const HeadingGroup& operator[](size_t g) const { return groups[g]; }
+    size_t size() const { return groups.size(); }
+  };
+  /// Heading groups of every level for `points`; `headings` is the count.
+  HeadingGroups headingGroups(const std::vector<Vec2>& points, int headings) const;
   int cellValue(int level, int x, int y) const;
   /// Upper bound of the score of every pose in the node (the exact score of a single pose), as the
   /// sum of the cell values (at most kScoreScale per point); once it falls short of a perfect sum by
   /// more than `max_deficit`, some lower value (the node is pruned either way).
-  int nodeSum(const HeadingGroup& group, int level, int x, int y, int max_deficit) const;
+  int nodeSum(const HeadingGroups& groups, int group, int level, int x, int y, int max_deficit) const;
   bool regionAllows(int level, int x, int y) const;
   double headingStep(double reach) const;
   Pose2 poseOf(int heading, int headings, int x, int y) const;

@@ -148,7 +148,11 @@ bool MapLocalizer::applyFix(const Fix& fix, const PreparedScan& scan, const Pose
 
 std::vector<size_t> MapLocalizer::nearestReferences(const Pose2& pose, size_t count) const {
   std::vector<std::pair<double, size_t>> near;
+  const double reach2 = (options_.track_radius + 1e-6) * (options_.track_radius + 1e-6);
   for (size_t i = 0; i < references_.size(); ++i) {
+    // Farther than track_radius whatever the frame (a rotation keeps lengths): no need for the
+    // relative pose and its sine and cosine.
+    if ((references_[i].pose.translation() - pose.translation()).squaredNorm() > reach2) continue;
     const Pose2 relative = between(references_[i].pose, pose);
     const double distance = relative.translation().norm();
     if (distance <= options_.track_radius && std::abs(relative.theta) <= options_.track_heading)
