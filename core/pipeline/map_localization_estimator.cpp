@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <numeric>
 
 #include "grid/grid_files.hpp"
 #include "grid/graph_scan_store.hpp"
@@ -39,6 +41,7 @@ void MapLocalizationEstimator::startTracking(const Pose2& pose, const Mat3& cov)
   tracker_->localizeIn(map_, pose, cov);
   if (last_odometry_) tracker_->onOdometry(*last_odometry_);  // its integrator starts from the latest reading
   unmatched_near_map_ = 0;
+  stretch_scans_ = last_map_match_ = 0;
   ++tracked_stretches_;
 }
 
@@ -47,6 +50,7 @@ void MapLocalizationEstimator::search(const LaserScan& scan) {
   if (!config_.slam.localization.temporary_mapping || !last_result_.found) return;
   // The search stretch re-placed from the fix, as dead reckoning.
   const std::vector<PoseStamped> searched = localizer_.trajectory();
+  replaceTail(searched);
   placed_.insert(placed_.end(), searched.begin() + static_cast<long>(search_start_), searched.end());
   startTracking(last_result_.pose.pose, last_result_.pose.cov);
 }
@@ -60,6 +64,8 @@ void MapLocalizationEstimator::track(const LaserScan& scan) {
   last_result_.localized = true;
   last_result_.matched = r.map_matched;
   map_matched_scans_ += r.map_matched ? 1 : 0;
+  if (r.map_matched) last_map_match_ = stretch_scans_;
+  ++stretch_scans_;
   // On new ground the temporary reference scans carry the robot; where the map's reference scans
   // should be seen and are not, it is not where it is thought to be (a kidnapping, a look-alike).
   if (r.map_matched) unmatched_near_map_ = 0;
@@ -82,15 +88,85 @@ void MapLocalizationEstimator::countTemporaryReferenceScans() {
 
 void MapLocalizationEstimator::loseTracking(int64_t utime) {
   const std::vector<PoseStamped> tracked = tracker_->slam().trajectory();
-  // The scans since the last map match keep their tracked poses: some before a kidnapping are
-  // right, and which ones is not known.
+  // The scans since the last map match keep their tracked poses until the next fix: it re-places
+  // them if it explains the loss as drift (replaceTail); before a kidnapping they are right.
+  const size_t begin = placed_.size();
   placed_.insert(placed_.end(), tracked.begin(), tracked.end());
+  tail_.reset();
+  if (tracked.size() == stretch_scans_ && last_map_match_ + 1 < tracked.size()) {
+    Tail tail{begin + last_map_match_ + 1, placed_.size(), tracked[last_map_match_].pose, 0.0};
+    for (size_t i = last_map_match_ + 1; i < tracked.size(); ++i)
+      tail.path += (tracked[i].pose.translation() - tracked[i - 1].pose.translation()).norm();
+    tail_ = tail;
+  }
   countTemporaryReferenceScans();
   localizer_.searchFrom(tracked.back().pose, utime);
   search_start_ = localizer_.onlineTrajectory().size();
   tracker_.reset();
   last_result_.localized = false;
   ++tracking_losses_;
+}
+
+namespace {
+
+Vec2 rotated(const Vec2& v, double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  return {c * v.x() - s * v.y(), s * v.x() + c * v.y()};
+}
+
+}  // namespace
+
+void MapLocalizationEstimator::replaceTail(const std::vector<PoseStamped>& searched) {
+  if (!tail_ || search_start_ >= searched.size()) return;
+  const Tail tail = *tail_;
+  tail_.reset();
+  const std::vector<PoseStamped>& online = localizer_.onlineTrajectory();
+  // The search's dead reckoning started at the loss; the fix re-placed it rigidly.
+  const Pose2 correction = searched[search_start_].pose * online[search_start_].pose.inverse();
+  const Pose2 lost = placed_[tail.end - 1].pose, found = correction * lost;
+  double search_path = 0.0;
+  for (size_t i = search_start_ + 1; i < searched.size(); ++i)
+    search_path += (searched[i].pose.translation() - searched[i - 1].pose.translation()).norm();
+  const double shift = (found.translation() - lost.translation()).norm();
+  const double turn = std::abs(wrapAngle(found.theta - lost.theta));
+  const double travelled = tail.path + search_path;
+  const MapLocalizationParams& limits = config_.slam.localization;
+  if (shift > limits.tail_max_shift + limits.tail_shift_per_metre * travelled ||
+      turn > limits.tail_max_turn + limits.tail_turn_per_metre * travelled)
+    return;
+  ++replaced_tails_;
+  // Spread by the growth of the position variance along the tail (by distance where it did not grow).
+  std::vector<double> growth, distance;
+  double previous_trace = placed_[tail.begin - 1].cov.topLeftCorner<2, 2>().trace();
+  Vec2 previous = tail.anchor.translation();
+  for (size_t i = tail.begin; i < tail.end; ++i) {
+    const double trace = placed_[i].cov.topLeftCorner<2, 2>().trace();
+    growth.push_back(std::max(0.0, trace - previous_trace));
+    distance.push_back((placed_[i].pose.translation() - previous).norm());
+    previous_trace = trace;
+    previous = placed_[i].pose.translation();
+  }
+  const bool grew = std::accumulate(growth.begin(), growth.end(), 0.0) > 0.0;
+  spreadCorrection(std::span(placed_).subspan(tail.begin, tail.end - tail.begin), tail.anchor.translation(), found,
+                   grew ? growth : distance);
+}
+
+void spreadCorrection(std::span<PoseStamped> poses, const Vec2& pivot, const Pose2& corrected_last,
+                      const std::vector<double>& weights) {
+  if (poses.empty()) return;
+  const Pose2 last = poses.back().pose;
+  const double dtheta = wrapAngle(corrected_last.theta - last.theta);
+  const Vec2 dt = corrected_last.translation() - (pivot + rotated(last.translation() - pivot, dtheta));
+  const double total = std::accumulate(weights.begin(), weights.end(), 0.0);
+  double along = 0.0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    along += i < weights.size() ? weights[i] : 0.0;
+    const double share = total > 0.0 ? along / total : 1.0;
+    Pose2& pose = poses[i].pose;
+    const Vec2 p = pivot + rotated(pose.translation() - pivot, share * dtheta) + share * dt;
+    pose = {p.x(), p.y(), wrapAngle(pose.theta + share * dtheta)};
+  }
+  poses.back().pose = corrected_last;  // exactly, whatever rounding
 }
 
 nlohmann::json localizationReportJson(const MapLocalizer& localizer, double seconds) {
@@ -147,6 +223,7 @@ void MapLocalizationEstimator::finish(const std::string& out_dir, nlohmann::json
     section["matched_scans"] = localizer_.stats().matched_scans + map_matched_scans_;  // the fixes, and while tracking
     section["tracked_stretches"] = tracked_stretches_;
     section["tracking_losses"] = tracking_losses_;
+    section["replaced_tails"] = replaced_tails_;
     section["temporary_reference_scans"] = temporary_reference_scans_;
     section["tracking_at_end"] = tracking;
   }

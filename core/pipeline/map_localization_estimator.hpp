@@ -14,12 +14,15 @@
 //
 // Online trajectory: the poses at scan time. Final trajectory: each tracked stretch as its PSM
 // SLAM graph places it after a final optimisation, each searched stretch re-placed from the fix
-// that ended it. The map's grid is drawn again with the localised trajectory.
+// that ended it, and a lost stretch's drifted scans since its last map match with them where
+// that fix explains the loss as drift (Tail). The map's grid is drawn again with the localised
+// trajectory.
 //
 // With localization.temporary_mapping off, MapLocalizer tracks too: the map's reference scans
 // only, and a single local reference on new ground.
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -29,6 +32,13 @@
 #include "slam/map_localizer.hpp"
 
 namespace polarslam {
+
+/// Moves the last of `poses` to `corrected_last` and the others part of the way: pose i is rotated
+/// about `pivot` and translated by the share (weights[0] + … + weights[i]) / Σ weights of that
+/// correction (all of it when the weights sum to 0), as a chain of relative poses from `pivot`
+/// closed at its end takes a correction in proportion to the uncertainty each link adds.
+void spreadCorrection(std::span<PoseStamped> poses, const Vec2& pivot, const Pose2& corrected_last,
+                      const std::vector<double>& weights);
 
 /// The "localization" report figures of a localiser (`seconds` spent in it).
 nlohmann::json localizationReportJson(const MapLocalizer& localizer, double seconds);
@@ -68,6 +78,19 @@ class MapLocalizationEstimator : public Estimator {
   bool nearMap(const Pose2& pose) const;
   /// Adds the reference scans the current tracked stretch added to the map's.
   void countTemporaryReferenceScans();
+  /// A fix ended the search that followed a loss: re-places the lost stretch's tail (see Tail).
+  void replaceTail(const std::vector<PoseStamped>& searched);
+
+  /// The scans of a lost stretch since its last match with the map, in placed_ [begin, end): the
+  /// robot was placed by its own temporary reference scans there, drifting. Where the fix that
+  /// ends the search puts the loss within the drift that distance allows (a doubt or a timeout
+  /// caught the drift, no kidnapping), the correction is spread along the tail, as a pose graph's
+  /// odometry chain would: nothing at the last map match, all of it at the loss.
+  struct Tail {
+    size_t begin = 0, end = 0;
+    Pose2 anchor;          ///< the pose of the last map match
+    double path = 0.0;     ///< m travelled along the tail
+  };
 
   StoredMap map_;
   PsmSlamEstimatorConfig config_;
@@ -76,8 +99,11 @@ class MapLocalizationEstimator : public Estimator {
   std::optional<OdometryReading> last_odometry_;
   int unmatched_near_map_ = 0;             ///< usable scans in a row near the map without a map match
   size_t map_matched_scans_ = 0;           ///< tracked scans matched with the map
-  size_t tracking_losses_ = 0, tracked_stretches_ = 0, temporary_reference_scans_ = 0;
+  size_t tracking_losses_ = 0, tracked_stretches_ = 0, temporary_reference_scans_ = 0, replaced_tails_ = 0;
   size_t search_start_ = 0;                ///< the localiser's first scan of the current search
+  size_t stretch_scans_ = 0;               ///< scans of the current tracked stretch
+  size_t last_map_match_ = 0;              ///< ... the last matched with the map (0: its start)
+  std::optional<Tail> tail_;               ///< of the stretch lost last, until the next fix
   std::vector<PoseStamped> placed_;        ///< final poses of the stretches that have ended
   std::vector<PoseStamped> online_, final_;
   std::vector<bool> localized_flags_;

@@ -97,6 +97,38 @@ double corridorDirection(const std::vector<double>& angles) {
   return foldAngle(centre + (count > 0 ? sum / count : 0.0));
 }
 
+/// Slope of the range profile, dr/dj, at each reading inside a segment: a least-squares line
+/// through readings i−k…i+k of its segment (σ_slope = σ_r·√(3/(k(k+1)(2k+1))) per beam), k at
+/// least 2 and covering `half_span` of arc, at most 12, fewer at segment ends; NaN at the ends.
+/// Noisy slopes would give the matcher information it does not have, e.g. along a corridor.
+void fitSlopes(PreparedScan& out, double half_span, double increment) {
+  const size_t n = out.size();
+  out.slope.assign(n, std::numeric_limits<float>::quiet_NaN());
+  if (n < 3) return;
+  auto same = [&](size_t a, size_t b) { return out.segment[a] != 0 && out.segment[a] == out.segment[b]; };
+  // Prefix sums of r and j·r: the slope over a symmetric window is then one difference.
+  std::vector<double> sum_r(n + 1, 0.0), sum_jr(n + 1, 0.0);
+  for (size_t i = 0; i < n; ++i) {
+    const double r = out.segment[i] != 0 ? out.range[i] : 0.0;
+    sum_r[i + 1] = sum_r[i] + r;
+    sum_jr[i + 1] = sum_jr[i] + static_cast<double>(i) * r;
+  }
+  std::vector<int> left(n, 0), right(n, 0);  // readings of the same segment before and after
+  for (size_t i = 1; i < n; ++i) left[i] = same(i, i - 1) ? left[i - 1] + 1 : 0;
+  for (size_t i = n - 1; i-- > 0;) right[i] = same(i, i + 1) ? right[i + 1] + 1 : 0;
+  constexpr int kMinHalf = 2, kMaxHalf = 12;
+  for (size_t i = 1; i + 1 < n; ++i) {
+    const double arc = out.range[i] * increment;
+    const double wanted = std::clamp(arc > 0.0 ? std::round(half_span / arc) : 0.0, double{kMinHalf}, double{kMaxHalf});
+    const int k = std::min({static_cast<int>(wanted), left[i], right[i]});
+    if (k < 1) continue;
+    const size_t a = i - static_cast<size_t>(k), b = i + static_cast<size_t>(k) + 1;
+    const double moment = (sum_jr[b] - sum_jr[a]) - static_cast<double>(i) * (sum_r[b] - sum_r[a]);
+    const double kd = k;
+    out.slope[i] = static_cast<float>(moment * 3.0 / (kd * (kd + 1.0) * (2.0 * kd + 1.0)));  // Σ j² = k(k+1)(2k+1)/3
+  }
+}
+
 /// What PSM's joint system needs of the reference alone, so that each match iteration only adds
 /// the pose-dependent part.
 void computeSurfaceTerms(PreparedScan& scan) {
@@ -252,18 +284,7 @@ PreparedScan prepareScan(const LaserScan& scan, const PsmParams& params) {
   out.pair_mask.assign(padded, 0);
   for (size_t i = 1; i < n; ++i)
     if (out.segment[i] != 0 && out.segment[i] == out.segment[i - 1]) out.pair_mask[i] = -1;
-  // Slope of the range profile, dr/dj: a least-squares line through five readings of one segment
-  // (σ_slope ≈ σ_r/√10 per beam), three at segment ends. Noisy slopes would give the matcher
-  // information it does not have, e.g. along a corridor.
-  out.slope.assign(n, std::numeric_limits<float>::quiet_NaN());
-  auto same = [&](size_t a, size_t b) { return out.segment[a] != 0 && out.segment[a] == out.segment[b]; };
-  for (size_t i = 1; i + 1 < n; ++i) {
-    if (!same(i, i - 1) || !same(i, i + 1)) continue;
-    if (i >= 2 && i + 2 < n && same(i, i - 2) && same(i, i + 2))
-      out.slope[i] = (2.0f * (out.range[i + 2] - out.range[i - 2]) + out.range[i + 1] - out.range[i - 1]) / 10.0f;
-    else
-      out.slope[i] = 0.5f * (out.range[i + 1] - out.range[i - 1]);
-  }
+  fitSlopes(out, params.slope_half_span, increment);
   computeSurfaceTerms(out);
   out.corridor = detectCorridor(out, params.corridor_threshold);
   return out;

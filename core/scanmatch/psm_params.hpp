@@ -57,6 +57,13 @@ struct PsmParams {
   double max_range = 10.0;            ///< PM_MAX_RANGE: farther readings are flagged (§4.2)
   double min_range = 0.10;            ///< PM_MIN_RANGE: nearer readings and projections are unused
   double segment_max_distance = 0.20; ///< PM_SEG_MAX_DIST (§4.3)
+  /// The slope of the range profile (the surface normal of the joint step and of the WLS
+  /// covariance) is a least-squares line over at least two readings either side, and over at
+  /// least this length of arc (m; at most 12 readings) where readings are denser: 1 cm of range
+  /// noise over five readings half a metre away tilts a normal by about 20°, which claims
+  /// information along a corridor that the ranges do not carry. 0 keeps five readings everywhere:
+  /// 0.05 makes corridor covariances honest but is not the default yet (core/scanmatch/README.md).
+  double slope_half_span = 0.0;
   int decimation = 1;                 ///< keep every n-th beam (2 reproduces the thesis 1° grid from 0.5° logs)
 
   // --- matching (§6–§9) ---

@@ -9,6 +9,7 @@ void describeMatcher(ParameterTable& t, PsmParams& p) {
   t.number("median_replace_threshold", p.median_replace_threshold, 0.0, 10.0,
            "m: the median filter replaces a reading only when it differs more");
   t.number("segment_max_distance", p.segment_max_distance, 0.01, 10.0, "m between neighbours of one segment");
+  t.number("slope_half_span", p.slope_half_span, 0.0, 1.0, "m: surface slopes fitted over this much arc either side at least");
   t.integer("decimation", p.decimation, 1, 100, "keep every n-th beam");
   t.integer("min_valid_points", p.min_valid_points, 3, 100000, "fewer usable readings: no match");
   t.angle("search_window_deg", p.search_window, 0.5, 180.0, "orientation search window");
@@ -141,6 +142,10 @@ void describeLocalization(ParameterTable& t, MapLocalizationParams& p) {
   t.number("doubt_max_fit", p.doubt_max_fit, 0.0, 1.0, "while tracked near the map, a scan fitting less searches globally");
   t.number("confirm_translation", p.confirm_translation, 0.0, 100.0, "m: two hits agree after the odometry");
   t.angle("confirm_rotation_deg", p.confirm_rotation, 0.0, 180.0, "the same for heading");
+  t.number("tail_max_shift", p.tail_max_shift, 0.0, 1000.0, "m: a fix after a loss re-places the drifted scans before it ...");
+  t.number("tail_shift_per_metre", p.tail_shift_per_metre, 0.0, 10.0, "... if it moves them this much more per metre at most ...");
+  t.angle("tail_max_turn_deg", p.tail_max_turn, 0.0, 180.0, "... and turns them at most this ...");
+  t.angle("tail_turn_per_metre_deg", p.tail_turn_per_metre, 0.0, 180.0, "... plus this per metre since the last map match");
 }
 
 }  // namespace

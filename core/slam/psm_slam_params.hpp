@@ -72,6 +72,15 @@ struct MapLocalizationParams {
   /// The hit of the next search must agree with the previous one after the odometry in between.
   double confirm_translation = 0.15;     ///< m
   double confirm_rotation = deg2rad(5.0);
+  /// Temporary mapping: the fix that ends the search after a loss re-places the lost stretch's
+  /// scans since its last map match (they drifted on their own reference scans) when it moves the
+  /// stretch's last pose by at most tail_max_shift + tail_shift_per_metre·d and turns it by at most
+  /// tail_max_turn + tail_turn_per_metre·d, d the distance travelled since that match: drift, not
+  /// a kidnapping (map_localization_estimator.hpp).
+  double tail_max_shift = 0.5;           ///< m
+  double tail_shift_per_metre = 0.1;
+  double tail_max_turn = deg2rad(5.0);
+  double tail_turn_per_metre = deg2rad(1.0);  ///< rad per m
 };
 
 struct PsmSlamParams {

@@ -285,6 +285,38 @@ TEST(MapLocalization, AKidnappedRobotIsNoticedAndFoundAgainWhereItIs) {
   EXPECT_EQ(tally.foundWithin20(), 20u) << "issue 15: every kidnap recovered within 20 scans";
 }
 
+// The drifted stretch before a loss, re-placed when the fix explains the loss as drift: the
+// correction grows along it with the weights, none before the first weight, all of it at the end.
+TEST(MapLocalization, ACorrectionIsSpreadAlongTheStretchByItsWeights) {
+  std::vector<PoseStamped> poses;
+  for (int i = 1; i <= 4; ++i) poses.push_back({i, Pose2(i, 0.0, 0.0), Mat3::Zero()});
+  const std::vector<PoseStamped> before = poses;
+  const Pose2 corrected(4.0, 0.4, 0.0);  // the last pose 0.4 m off sideways, no turn
+  spreadCorrection(poses, Vec2(0.0, 0.0), corrected, {0.0, 0.0, 1.0, 1.0});
+  auto same = [](const Pose2& a, const Pose2& b) { return distance(a, b) < 1e-12 && std::abs(a.theta - b.theta) < 1e-12; };
+  EXPECT_TRUE(same(poses[0].pose, before[0].pose));
+  EXPECT_TRUE(same(poses[1].pose, before[1].pose));
+  EXPECT_NEAR(poses[2].pose.y, 0.2, 1e-12);
+  EXPECT_NEAR(poses[2].pose.x, 3.0, 1e-12);
+  EXPECT_TRUE(same(poses[3].pose, corrected));
+
+  // A turn is spread too, about the pivot: with equal weights the first of four poses turns by a
+  // quarter of it and keeps its distance from the pivot (no translation left at the end).
+  poses = before;
+  const double turn = deg2rad(8.0);
+  const Pose2 turned(4.0 * std::cos(turn), 4.0 * std::sin(turn), turn);
+  spreadCorrection(poses, Vec2(0.0, 0.0), turned, {1.0, 1.0, 1.0, 1.0});
+  EXPECT_NEAR(poses[0].pose.theta, turn / 4.0, 1e-12);
+  EXPECT_NEAR(poses[0].pose.translation().norm(), 1.0, 1e-12);
+  EXPECT_NEAR(std::atan2(poses[1].pose.y, poses[1].pose.x), turn / 2.0, 1e-12);
+  EXPECT_NEAR(distance(poses[3].pose, turned), 0.0, 1e-12);
+
+  // No weight anywhere: the whole stretch moves rigidly with its end.
+  poses = before;
+  spreadCorrection(poses, Vec2(0.0, 0.0), corrected, {0.0, 0.0, 0.0, 0.0});
+  for (const PoseStamped& p : poses) EXPECT_NEAR(p.pose.y, 0.4, 1e-12);
+}
+
 TEST(MapContinuation, AKnownStartMapsOnInTheMapsFrameAndClosesLoopsWithIt) {
   const StoredMap map = storedMapOfOneLap();
   const SyntheticRun run = runFromMidLoop(31);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 
 #include "scan_fixtures.hpp"
@@ -132,6 +133,53 @@ TEST(Segmentation, ThreeCollinearLonePointsAreJoined) {
   EXPECT_NE(seg[1], 0);
   EXPECT_EQ(seg[1], seg[2]);
   EXPECT_EQ(seg[2], seg[3]);
+}
+
+/// RMS angle (rad) between the surface normals of the prepared scans and the wall's, over the
+/// readings within ±45° of a wall half a metre ahead (σ = 1 cm).
+double normalNoiseNearAWall(const PsmParams& params) {
+  World wall;
+  wall.addPolyline({{0.5, -3.0}, {0.5, 3.0}}, {Material::Wall}, false, "wall");
+  fixtures::Noise noise(7);
+  fixtures::ScanSpec spec;
+  spec.noise_sigma = 0.01;
+  double sum = 0.0;
+  int count = 0;
+  for (int k = 0; k < 40; ++k) {
+    const PreparedScan s = prepareScan(fixtures::simulateScan(wall, {}, spec, &noise), params);
+    for (size_t j = 45; j <= 135; ++j) {
+      if (!std::isfinite(s.surface.rho[j])) continue;
+      const double angle = std::atan2(s.surface.normal_y[j], s.surface.normal_x[j]);  // the wall's is (1, 0)
+      sum += angle * angle;
+      ++count;
+    }
+  }
+  EXPECT_GT(count, 40 * 80);
+  return std::sqrt(sum / count);
+}
+
+TEST(SurfaceSlope, SpansCentimetresNearAWallSoNormalsAreNotNoise) {
+  PsmParams params;
+  params.slope_half_span = 0.05;
+  const double wide = normalNoiseNearAWall(params);
+  params.slope_half_span = 0.0;  // five readings (the default): 4 cm of wall
+  const double five = normalNoiseNearAWall(params);
+  std::printf("[ slope ] normal noise half a metre from a wall: %.1f deg (five readings: %.1f deg)\n", rad2deg(wide),
+              rad2deg(five));
+  EXPECT_LT(wide, deg2rad(8.0));
+  EXPECT_GT(five, 2.0 * wide);
+}
+
+TEST(SurfaceSlope, FitIsExactOnAStraightProfileUpToTheSegmentEnds) {
+  // r = 2 + 0.01·j inside one segment: the slope is 0.01 per beam wherever two readings flank it.
+  std::vector<float> ranges(41);
+  for (size_t j = 0; j < ranges.size(); ++j) ranges[j] = 2.0f + 0.01f * static_cast<float>(j);
+  PsmParams params;
+  params.median_filter = false;
+  const PreparedScan s = prepareScan(scanOf(ranges), params);
+  EXPECT_TRUE(std::isnan(s.slope.front()));
+  EXPECT_TRUE(std::isnan(s.slope.back()));
+  for (size_t j = 1; j + 1 < ranges.size(); ++j) EXPECT_NEAR(s.slope[j], 0.01f, 1e-5f) << j;
 }
 
 TEST(FastAtan2, MatchesLibmEverywhere) {
