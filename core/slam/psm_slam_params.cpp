@@ -6,6 +6,7 @@ namespace {
 void describeMatcher(ParameterTable& t, PsmParams& p) {
   t.number("max_range", p.max_range, 0.5, 100.0, "m: farther readings are not matched");
   t.number("min_range", p.min_range, 0.0, 10.0, "m: nearer readings are not matched");
+  t.boolean("median_filter", p.median_filter, "5-reading median filter: removes legs and other 1-2 reading objects");
   t.number("median_replace_threshold", p.median_replace_threshold, 0.0, 10.0,
            "m: the median filter replaces a reading only when it differs more");
   t.number("segment_max_distance", p.segment_max_distance, 0.01, 10.0, "m between neighbours of one segment");
