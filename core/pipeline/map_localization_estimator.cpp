@@ -93,12 +93,8 @@ void MapLocalizationEstimator::loseTracking(int64_t utime) {
   const size_t begin = placed_.size();
   placed_.insert(placed_.end(), tracked.begin(), tracked.end());
   tail_.reset();
-  if (tracked.size() == stretch_scans_ && last_map_match_ + 1 < tracked.size()) {
-    Tail tail{begin + last_map_match_ + 1, placed_.size(), tracked[last_map_match_].pose, 0.0};
-    for (size_t i = last_map_match_ + 1; i < tracked.size(); ++i)
-      tail.path += (tracked[i].pose.translation() - tracked[i - 1].pose.translation()).norm();
-    tail_ = tail;
-  }
+  if (tracked.size() == stretch_scans_ && last_map_match_ + 1 < tracked.size())
+    tail_ = Tail{begin + last_map_match_ + 1, placed_.size()};
   countTemporaryReferenceScans();
   localizer_.searchFrom(tracked.back().pose, utime);
   search_start_ = localizer_.onlineTrajectory().size();
@@ -109,9 +105,17 @@ void MapLocalizationEstimator::loseTracking(int64_t utime) {
 
 namespace {
 
-Vec2 rotated(const Vec2& v, double angle) {
-  const double c = std::cos(angle), s = std::sin(angle);
-  return {c * v.x() - s * v.y(), s * v.x() + c * v.y()};
+/// m travelled along `poses`.
+double pathLength(std::span<const PoseStamped> poses) {
+  double length = 0.0;
+  for (size_t i = 1; i < poses.size(); ++i)
+    length += (poses[i].pose.translation() - poses[i - 1].pose.translation()).norm();
+  return length;
+}
+
+/// `p` turned by `angle` about `pivot`.
+Vec2 turnedAbout(const Vec2& pivot, const Vec2& p, double angle) {
+  return Pose2(pivot.x(), pivot.y(), angle).transform(p - pivot);
 }
 
 }  // namespace
@@ -120,16 +124,15 @@ void MapLocalizationEstimator::replaceTail(const std::vector<PoseStamped>& searc
   if (!tail_ || search_start_ >= searched.size()) return;
   const Tail tail = *tail_;
   tail_.reset();
+  // The tail runs from the last map match, placed_[begin − 1], to the loss, placed_[end − 1].
+  const std::span<PoseStamped> from_match = std::span(placed_).subspan(tail.begin - 1, tail.end - tail.begin + 1);
   const std::vector<PoseStamped>& online = localizer_.onlineTrajectory();
   // The search's dead reckoning started at the loss; the fix re-placed it rigidly.
   const Pose2 correction = searched[search_start_].pose * online[search_start_].pose.inverse();
-  const Pose2 lost = placed_[tail.end - 1].pose, found = correction * lost;
-  double search_path = 0.0;
-  for (size_t i = search_start_ + 1; i < searched.size(); ++i)
-    search_path += (searched[i].pose.translation() - searched[i - 1].pose.translation()).norm();
+  const Pose2 lost = from_match.back().pose, found = correction * lost;
+  const double travelled = pathLength(from_match) + pathLength(std::span(searched).subspan(search_start_));
   const double shift = (found.translation() - lost.translation()).norm();
   const double turn = std::abs(wrapAngle(found.theta - lost.theta));
-  const double travelled = tail.path + search_path;
   const MapLocalizationParams& limits = config_.slam.localization;
   if (shift > limits.tail_max_shift + limits.tail_shift_per_metre * travelled ||
       turn > limits.tail_max_turn + limits.tail_turn_per_metre * travelled)
@@ -137,18 +140,13 @@ void MapLocalizationEstimator::replaceTail(const std::vector<PoseStamped>& searc
   ++replaced_tails_;
   // Spread by the growth of the position variance along the tail (by distance where it did not grow).
   std::vector<double> growth, distance;
-  double previous_trace = placed_[tail.begin - 1].cov.topLeftCorner<2, 2>().trace();
-  Vec2 previous = tail.anchor.translation();
-  for (size_t i = tail.begin; i < tail.end; ++i) {
-    const double trace = placed_[i].cov.topLeftCorner<2, 2>().trace();
-    growth.push_back(std::max(0.0, trace - previous_trace));
-    distance.push_back((placed_[i].pose.translation() - previous).norm());
-    previous_trace = trace;
-    previous = placed_[i].pose.translation();
+  for (size_t i = 1; i < from_match.size(); ++i) {
+    const auto trace = [&](size_t k) { return from_match[k].cov.topLeftCorner<2, 2>().trace(); };
+    growth.push_back(std::max(0.0, trace(i) - trace(i - 1)));
+    distance.push_back((from_match[i].pose.translation() - from_match[i - 1].pose.translation()).norm());
   }
   const bool grew = std::accumulate(growth.begin(), growth.end(), 0.0) > 0.0;
-  spreadCorrection(std::span(placed_).subspan(tail.begin, tail.end - tail.begin), tail.anchor.translation(), found,
-                   grew ? growth : distance);
+  spreadCorrection(from_match.subspan(1), from_match.front().pose.translation(), found, grew ? growth : distance);
 }
 
 void spreadCorrection(std::span<PoseStamped> poses, const Vec2& pivot, const Pose2& corrected_last,
@@ -156,14 +154,14 @@ void spreadCorrection(std::span<PoseStamped> poses, const Vec2& pivot, const Pos
   if (poses.empty()) return;
   const Pose2 last = poses.back().pose;
   const double dtheta = wrapAngle(corrected_last.theta - last.theta);
-  const Vec2 dt = corrected_last.translation() - (pivot + rotated(last.translation() - pivot, dtheta));
+  const Vec2 dt = corrected_last.translation() - turnedAbout(pivot, last.translation(), dtheta);
   const double total = std::accumulate(weights.begin(), weights.end(), 0.0);
   double along = 0.0;
   for (size_t i = 0; i < poses.size(); ++i) {
     along += i < weights.size() ? weights[i] : 0.0;
     const double share = total > 0.0 ? along / total : 1.0;
     Pose2& pose = poses[i].pose;
-    const Vec2 p = pivot + rotated(pose.translation() - pivot, share * dtheta) + share * dt;
+    const Vec2 p = turnedAbout(pivot, pose.translation(), share * dtheta) + share * dt;
     pose = {p.x(), p.y(), wrapAngle(pose.theta + share * dtheta)};
   }
   poses.back().pose = corrected_last;  // exactly, whatever rounding

@@ -87,9 +87,7 @@ class MapLocalizationEstimator : public Estimator {
   /// caught the drift, no kidnapping), the correction is spread along the tail, as a pose graph's
   /// odometry chain would: nothing at the last map match, all of it at the loss.
   struct Tail {
-    size_t begin = 0, end = 0;
-    Pose2 anchor;          ///< the pose of the last map match
-    double path = 0.0;     ///< m travelled along the tail
+    size_t begin = 0, end = 0;  ///< placed_[begin − 1] is the last map match
   };
 
   StoredMap map_;
