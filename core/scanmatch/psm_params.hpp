@@ -78,6 +78,12 @@ struct PsmParams {
   double weighting_factor = 0.49;     ///< C = 70² cm², w = C/(C + Δr²)
   double late_weighting_factor = 0.01;///< C after change_weight_iteration (v0.1/v0.2: 10² cm²)
   int change_weight_iteration = 10;   ///< PM_CHANGE_WEIGHT_ITER
+  /// Before change_weight_iteration, C = (scale·ē)² within [late_weighting_factor,
+  /// weighting_factor], ē the mean |Δr| of the residuals within max_error/2 at the current pose:
+  /// a robust scale from the residuals, so that from a good guess what only one scan sees (the
+  /// space behind a wall's end that the other passes by) does not pull as hard as the surfaces
+  /// both see. 0 = the fixed C of the original; 4 is not the default yet (core/scanmatch/README.md).
+  double adaptive_weighting_scale = 0.0;
   int max_iterations = 30;            ///< PM_MAX_ITER
   /// Stop after stop_count consecutive iterations with |Δx|+|Δy| < stop_translation and
   /// |Δθ| < stop_rotation (§9; the original 0.4 "cm + rad" rule is effectively the 4 mm test).

@@ -159,8 +159,27 @@ bool ScanMatcher::usableSample(const PreparedScan& ref, size_t j) const {
   return !ref.bad(j) && projection_.tag[j] == 0 && r > params_.min_range && r < params_.max_range;
 }
 
-double ScanMatcher::weightingFactor(int iteration) const {
-  return iteration < params_.change_weight_iteration ? params_.weighting_factor : params_.late_weighting_factor;
+double ScanMatcher::weightingFactor(int iteration, const PreparedScan& ref) const {
+  if (iteration >= params_.change_weight_iteration) return params_.late_weighting_factor;
+  if (params_.adaptive_weighting_scale <= 0.0) return params_.weighting_factor;
+  const double scale = params_.adaptive_weighting_scale * projectedErrorIndex(ref);
+  return std::clamp(scale * scale, params_.late_weighting_factor, params_.weighting_factor);
+}
+
+/// The error index (v0.3 pm_error_index2) of the current projection: mean |Δr| within max_error/2.
+double ScanMatcher::projectedErrorIndex(const PreparedScan& ref) const {
+  const float gate = static_cast<float>(0.5 * params_.max_error);
+  double sum = 0.0;
+  int count = 0;
+  for (size_t j = 0; j < ref.size(); ++j) {
+    if (!usableSample(ref, j)) continue;
+    const float e = std::abs(ref.range[j] - projection_.range[j]);
+    if (e < gate) {
+      sum += e;
+      ++count;
+    }
+  }
+  return count > 0 ? sum / count : params_.max_error;
 }
 
 ScanMatcher::TranslationStep ScanMatcher::solveTranslation(const PreparedScan& ref, const Pose2& pose, double c) {
@@ -424,14 +443,14 @@ MatchResult ScanMatcher::matchPsm(const PreparedScan& ref, const PreparedScan& c
       const double window = first_orientation ? std::max(params_.initial_search_window, params_.search_window)
                                               : params_.search_window;
       first_orientation = false;
-      const OrientationStep step = searchOrientation(ref, window, weightingFactor(iteration));
+      const OrientationStep step = searchOrientation(ref, window, weightingFactor(iteration, ref));
       result.status = step.status;
       result.pose.theta = wrapAngle(result.pose.theta + step.dtheta);
       stop.rotated(step.dtheta);
       last_rotation = std::abs(step.dtheta);
       rotated = true;
     } else {
-      const TranslationStep step = solveTranslation(ref, result.pose, weightingFactor(iteration));
+      const TranslationStep step = solveTranslation(ref, result.pose, weightingFactor(iteration, ref));
       result.status = step.status;
       result.valid_points = step.used;
       result.pose.x += step.dx;
@@ -492,12 +511,12 @@ MatchResult ScanMatcher::matchPsmC(const PreparedScan& ref, const PreparedScan& 
       const double window = first_orientation ? std::max(params_.initial_search_window, params_.search_window)
                                               : params_.search_window;
       first_orientation = false;
-      const OrientationStep step = searchOrientation(ref, window, weightingFactor(iteration));
+      const OrientationStep step = searchOrientation(ref, window, weightingFactor(iteration, ref));
       result.status = step.status;
       result.pose.theta = wrapAngle(result.pose.theta + step.dtheta);
       stop.rotated(step.dtheta);
     } else {
-      const CartesianStep step = solveCartesian(ref, weightingFactor(iteration));
+      const CartesianStep step = solveCartesian(ref, weightingFactor(iteration, ref));
       result.status = step.status;
       result.valid_points = step.used;
       // The correction is a motion in the reference frame: compose, do not add (§10, §14.6).

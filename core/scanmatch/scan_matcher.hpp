@@ -86,7 +86,8 @@ class ScanMatcher {
   MatchResult startResult(const PreparedScan& ref, const PreparedScan& cur, const Pose2& guess) const;
   bool usableSample(const PreparedScan& ref, size_t j) const;
 
-  double weightingFactor(int iteration) const;
+  double weightingFactor(int iteration, const PreparedScan& ref) const;
+  double projectedErrorIndex(const PreparedScan& ref) const;
   TranslationStep solveTranslation(const PreparedScan& ref, const Pose2& pose, double c);
   JointSystem jointSystem(const PreparedScan& ref, const Pose2& pose, double c) const;
   Mat3 covarianceFrom(const JointSystem& system) const;

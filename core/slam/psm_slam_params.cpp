@@ -17,6 +17,8 @@ void describeMatcher(ParameterTable& t, PsmParams& p) {
   t.angle("initial_search_window_deg", p.initial_search_window, 0.5, 180.0, "first orientation step's window");
   t.angle("coarse_search_step_deg", p.coarse_search_step, 0.0, 45.0, "coarse-to-fine step (0 = exhaustive)");
   t.number("max_error", p.max_error, 0.01, 100.0, "m: residual gate");
+  t.number("adaptive_weighting_scale", p.adaptive_weighting_scale, 0.0, 100.0,
+           "early robust weights' scale in error indices (0 = the original fixed C)");
   t.integer("max_iterations", p.max_iterations, 1, 10000, "iterations at most");
   t.number("stop_translation", p.stop_translation, 0.0, 1.0, "m: convergence test");
   t.angle("stop_rotation_deg", p.stop_rotation, 0.0, 10.0, "convergence test");

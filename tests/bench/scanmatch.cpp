@@ -26,6 +26,7 @@
 #include "io/carmen.hpp"
 #include "plot/image.hpp"
 #include "io/relations.hpp"
+#include "pipeline/psm_slam_estimator.hpp"
 #include "scanmatch/laser_odometry.hpp"
 #include "scanmatch/scan_matcher.hpp"
 #include "unit/scanmatch/scan_fixtures.hpp"
@@ -42,6 +43,7 @@ struct Options {
   std::string data = POLARSLAM_SHARED_DATA_DIR;
   int pairs = 500;
   uint64_t seed = 1;
+  PsmParams psm;  ///< the matcher's parameters: defaults, or a PSM SLAM configuration's psm section
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -53,12 +55,12 @@ struct Method {
   PsmParams params;
 };
 
-std::vector<Method> methods() {
-  PsmParams interpolating;
+std::vector<Method> methods(const PsmParams& base) {
+  PsmParams interpolating = base;
   interpolating.icp_interpolate = true;
-  return {{"PSM", MatchMethod::Psm, {}},
-          {"PSM-C", MatchMethod::PsmC, {}},
-          {"ICP", MatchMethod::Icp, {}},
+  return {{"PSM", MatchMethod::Psm, base},
+          {"PSM-C", MatchMethod::PsmC, base},
+          {"ICP", MatchMethod::Icp, base},
           {"ICP+i", MatchMethod::Icp, interpolating}};
 }
 
@@ -166,7 +168,7 @@ double mean(const std::vector<double>& v) {
 // ---------------------------------------------------------------------------------------------
 // 1. v0.3 simulated room
 
-void simulatedRoom() {
+void simulatedRoom(const Options& o) {
   std::printf("\n== 1. Simulated room (v0.3 unit test, §15.1): ±2 m × ±1.5 m, noise-free, guess (0, 0, 0) ==\n");
   std::printf("   goal (original test): error ≤ 0.5 cm and ≤ 0.5°\n");
   const World room = fixtures::psmTestRoom();
@@ -174,7 +176,7 @@ void simulatedRoom() {
   std::printf("   %-6s", "method");
   for (const Pose2& c : cases) std::printf(" | truth (%4.2f,%5.2f,%4.2f): err mm/deg  it", c.x, c.y, c.theta);
   std::printf("\n");
-  for (const Method& m : methods()) {
+  for (const Method& m : methods(o.psm)) {
     ScanMatcher matcher(m.params);
     const PreparedScan ref = prepareScan(fixtures::simulateScan(room, {}, {}), m.params);
     std::printf("   %-6s", m.name.c_str());
@@ -200,7 +202,7 @@ SimulatedFigures simulatedPairsExperiments(const Options& o) {
   SimulatedFigures f;
   const World office = fixtures::clutteredOffice();
   const Vec2 lo(-3.8, -2.8), hi(3.8, 2.8);
-  const PsmParams defaults;
+  const PsmParams& defaults = o.psm;
   const auto accuracy = simulatedPairs(office, lo, hi, o.pairs, o.seed, 0.1, deg2rad(5.0), defaults);
   const auto near = simulatedPairs(office, lo, hi, o.pairs, o.seed + 1, 0.3, deg2rad(20.0), defaults);
   const auto far = simulatedPairs(office, lo, hi, o.pairs, o.seed + 2, 0.5, deg2rad(30.0), defaults);
@@ -210,7 +212,7 @@ SimulatedFigures simulatedPairsExperiments(const Options& o) {
   std::printf("   goal: PSM mean error ≤ that of the ICP baseline\n");
   std::printf("   %-13s %8s %9s %9s %9s %9s %9s %7s\n", "method", "success", "mean mm", "med mm", "p95 mm", "mean deg",
               "p95 deg", "iters");
-  std::vector<Method> all = methods();
+  std::vector<Method> all = methods(o.psm);
   all.push_back({"PSM original", MatchMethod::Psm, originalPsm()});
   for (const Method& m : all) {
     const PairStats s = runPairs(accuracy, m);
@@ -272,13 +274,13 @@ void convergenceMaps(const Options& o) {
   const std::vector<double> headings{-45, -30, -20, -10, 0, 10, 20, 30, 45};
   constexpr int kCells = 21, kPixels = 8, kGap = 6;
   const int kPairs = 4;
-  const PsmParams defaults;
+  const PsmParams& defaults = o.psm;
   const auto pairs = simulatedPairs(office, {-3.0, -2.0}, {3.0, 2.0}, kPairs, o.seed + 20, 0.0, 0.0, defaults);
   std::filesystem::create_directories(o.out);
   std::printf("   %-13s", "method");
   for (double h : headings) std::printf(" %6.0f°", h);
   std::printf("   (converged share of the map per heading)\n");
-  std::vector<Method> all = methods();
+  std::vector<Method> all = methods(o.psm);
   all.push_back({"PSM original", MatchMethod::Psm, originalPsm()});
   for (const Method& m : all) {
     ScanMatcher matcher(m.params);
@@ -335,13 +337,13 @@ void covarianceExperiments(const Options& o) {
     const char* name;
     PsmParams params;
   };
-  PsmParams heuristic, heuristic_thesis;
+  PsmParams heuristic = o.psm, heuristic_thesis = o.psm;
   heuristic.covariance = heuristic_thesis.covariance = CovarianceModel::Heuristic;
   heuristic_thesis.heuristic = HeuristicCovarianceParams::thesis();
-  PsmParams raw_wls;
+  PsmParams raw_wls = o.psm;
   raw_wls.wls_inflation = 1.0;
   raw_wls.wls_floor_xy = raw_wls.wls_floor_theta = 0.0;
-  const Model models[] = {{"WLS (default)", {}},
+  const Model models[] = {{"WLS (default)", o.psm},
                           {"WLS uncalibrated", raw_wls},
                           {"heuristic 20 cm/4°", heuristic},
                           {"heuristic 10 cm/2°", heuristic_thesis}};
@@ -350,7 +352,7 @@ void covarianceExperiments(const Options& o) {
   std::printf("   (mean NEES; median in brackets)\n");
   std::vector<std::vector<PairCase>> scene_pairs;
   for (const Scene& s : scenes)
-    scene_pairs.push_back(simulatedPairs(*s.world, s.lo, s.hi, o.pairs, o.seed + 30, 0.1, deg2rad(5.0), PsmParams{}));
+    scene_pairs.push_back(simulatedPairs(*s.world, s.lo, s.hi, o.pairs, o.seed + 30, 0.1, deg2rad(5.0), o.psm));
   for (const Model& model : models) {
     std::printf("   %-20s", model.name);
     for (const auto& pairs : scene_pairs) {
@@ -361,8 +363,8 @@ void covarianceExperiments(const Options& o) {
   }
   for (double sigma : {0.005, 0.02}) {
     const auto pairs = simulatedPairs(office, {-3.8, -2.8}, {3.8, 2.8}, o.pairs / 2, o.seed + 40, 0.1, deg2rad(5.0),
-                                      PsmParams{}, sigma);
-    const PairStats s = runPairs(pairs, {"PSM", MatchMethod::Psm, {}});
+                                      o.psm, sigma);
+    const PairStats s = runPairs(pairs, {"PSM", MatchMethod::Psm, o.psm});
     std::printf("   WLS (default), office, σ = %.1f cm: mean NEES %.2f\n", 100 * sigma, mean(s.nees));
   }
 }
@@ -427,9 +429,9 @@ void mitExperiments(const Options& o) {
     std::printf("      %-16s %10.4f %10.4f %10.3f %9s %10s %10s  (%zu relations)\n", "wheel odometry", w.translation.mean,
                 w.translation.std, w.rotation_deg.mean, "-", "-", "-", w.evaluated);
   }
-  std::vector<Method> all = methods();
+  std::vector<Method> all = methods(o.psm);
   for (Method& m : all) m.params.decimation = 2;
-  Method full{"PSM 361 beams", MatchMethod::Psm, {}};
+  Method full{"PSM 361 beams", MatchMethod::Psm, o.psm};
   full.params.min_valid_points = 80;
   all.push_back(full);
   for (const Method& m : all) {
@@ -471,7 +473,7 @@ void mitExperiments(const Options& o) {
               "odometry guess where ICP+i agrees (≤ 2 cm, ≤ 0.5°)\n");
   std::printf("      goals: ≥ 99 %% up to 0.3 m / 20°, ≥ 97 %% up to 0.5 m / 30°\n");
   {
-    PsmParams p181;
+    PsmParams p181 = o.psm;
     p181.decimation = 2;
     PsmParams p181i = p181;
     p181i.icp_interpolate = true;
@@ -505,7 +507,7 @@ void mitExperiments(const Options& o) {
     };
     std::printf("      %-13s %16s %16s   (%zu pairs × 5 guesses; in brackets, failures along a corridor's free axis)\n",
                 "method", "0.3 m / 20°", "0.5 m / 30°", pairs.size());
-    for (Method m : methods()) {
+    for (Method m : methods(o.psm)) {
       m.params.decimation = 2;
       ScanMatcher mm(m.params);
       double rates[2], along_axis[2];
@@ -536,7 +538,7 @@ void mitExperiments(const Options& o) {
               "relation\n");
   std::printf("      %-13s %9s %10s %10s %10s %12s %12s\n", "method", "pairs", "mean mm", "median mm", "mean deg",
               "NEES rooms", "NEES corr.");
-  for (Method m : methods()) {
+  for (Method m : methods(o.psm)) {
     m.params.decimation = 2;
     ScanMatcher matcher(m.params);
     std::vector<double> t, r, nees_room, nees_corridor;
@@ -572,9 +574,18 @@ int main(int argc, char** argv) {
   app.add_option("--data", o.data, "shared data folder (mit-csail/)")->capture_default_str();
   app.add_option("--pairs", o.pairs, "simulated pairs per experiment")->capture_default_str();
   app.add_option("--seed", o.seed)->capture_default_str();
+  std::string config;
+  app.add_option("--psm-config", config, "PSM SLAM configuration (YAML) whose psm section the matchers use")
+      ->check(CLI::ExistingFile);
   CLI11_PARSE(app, argc, argv);
+  try {
+    if (!config.empty()) o.psm = loadPsmSlamEstimatorConfig(config).slam.psm;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_scanmatch: %s\n", e.what());
+    return 1;
+  }
   std::printf("bench_scanmatch: times are wall clock on one thread; run on an idle machine for representative times\n");
-  simulatedRoom();
+  simulatedRoom(o);
   simulatedPairsExperiments(o);
   convergenceMaps(o);
   covarianceExperiments(o);

@@ -145,6 +145,18 @@ TEST(PsmSlam, OdometryGlitchesAreOverruledByGoodMatches) {
   EXPECT_GE(result.stats.loop_closures, 1u);
   EXPECT_LT(maxPositionError(result.trajectory, run.truth), 0.10);
   EXPECT_LT(maxHeadingError(result.trajectory, run.truth), deg2rad(2.0));
+  // Without the median filter and with slopes over 5 cm, the reference scan kept at scan 692
+  // passes a cabinet's end 0.2 m away: with the original's fixed C the match from either start
+  // converged 0.6 m sideways, and a new reference scan took an 18° glitch for good. Residual-
+  // scaled weights keep the run on the truth (a stale step along a corridor may still be gated).
+  PsmSlamParams unfiltered = testParams();
+  unfiltered.psm.median_filter = false;
+  unfiltered.psm.slope_half_span = 0.05;
+  unfiltered.psm.adaptive_weighting_scale = 4.0;
+  const RunResult robust = runSlam(run, unfiltered);
+  EXPECT_GE(robust.stats.loop_closures, 1u);
+  EXPECT_LT(maxPositionError(robust.trajectory, run.truth), 0.10);
+  EXPECT_LT(maxHeadingError(robust.trajectory, run.truth), deg2rad(2.0));
 }
 
 TEST(PsmSlam, StationaryRobotHoldsItsPose) {
