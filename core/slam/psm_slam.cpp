@@ -444,9 +444,16 @@ bool PsmSlam::needsConfirmation(const RelativePosePrediction& prediction) const 
   return largestPositionSigma(prediction) > params_.loop_confirm_sigma;
 }
 
-bool PsmSlam::confirmedByHypothesis(const Pose2& robot, const Pose2& map_pose) const {
+bool PsmSlam::confirmedByHypothesis(const Pose2& robot, const Pose2& map_pose, double prior_sigma) const {
+  // From a prior wider than a look-alike place's extent, two scans a few decimetres apart see the
+  // same look-alike: the second closure must come from far enough along the path that the
+  // place would have to look alike over that stretch too.
+  const bool wide = prior_sigma > params_.loop_wide_prior_sigma;
   for (const LoopHypothesis& h : hypotheses_) {
-    if (h.scan == stats_.scans || stats_.scans - h.scan > static_cast<size_t>(params_.loop_confirm_scans)) continue;
+    if (h.scan == stats_.scans) continue;
+    if (wide ? between(h.robot, robot).translation().norm() < params_.loop_wide_confirm_distance
+             : stats_.scans - h.scan > static_cast<size_t>(params_.loop_confirm_scans))
+      continue;
     // The two closures must agree on how the robot moved in between, as the filter tracked it.
     const Pose2 disagreement = between(between(h.robot, robot), between(h.map_pose, map_pose));
     if (disagreement.translation().norm() <= params_.loop_confirm_translation &&
@@ -509,9 +516,9 @@ bool PsmSlam::applyLoopClosure(const Candidate& c, const Observation& o, const P
       ++stats_.loop_unverified;
       return false;
     }
-    if (!confirmedByHypothesis(robot, map_pose)) {
+    if (!confirmedByHypothesis(robot, map_pose, largestPositionSigma(c.prediction))) {
       hypotheses_.push_back({stats_.scans, robot, map_pose});
-      if (hypotheses_.size() > 16) hypotheses_.erase(hypotheses_.begin());
+      if (hypotheses_.size() > 32) hypotheses_.erase(hypotheses_.begin());
       ++stats_.loop_unconfirmed;
       return false;
     }

@@ -91,6 +91,8 @@ void describeLoops(ParameterTable& t, PsmSlamParams& p) {
   t.number("loop_confirm_translation", p.loop_confirm_translation, 0.0, 100.0, "m: agreeing on the motion");
   t.angle("loop_confirm_rotation_deg", p.loop_confirm_rotation, 0.0, 180.0, "the same for heading");
   t.number("loop_confirmed_chi2_gate", p.loop_confirmed_chi2_gate, 0.0, 1e9, "χ² gate once confirmed");
+  t.number("loop_wide_prior_sigma", p.loop_wide_prior_sigma, 0.0, 1000.0, "m: from wider priors the second closure...");
+  t.number("loop_wide_confirm_distance", p.loop_wide_confirm_distance, 0.0, 1000.0, "m: ...comes from this far along the path");
   t.number("loop_guess_spacing", p.loop_guess_spacing, 0.01, 100.0, "m between wide-search initial guesses");
   t.integer("loop_max_guesses", p.loop_max_guesses, 1, 10000, "wide-search guesses at most");
   t.number("loop_ambiguity_distance", p.loop_ambiguity_distance, 0.0, 1000.0, "m: another fit this far away ...");

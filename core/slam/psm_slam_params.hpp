@@ -179,6 +179,10 @@ struct PsmSlamParams {
   double loop_confirm_translation = 0.10;  ///< m
   double loop_confirm_rotation = deg2rad(2.0);
   double loop_confirmed_chi2_gate = 100.0;
+  /// From a prior wider than this (σ), the second closure must come from at least
+  /// loop_wide_confirm_distance farther along the path (at any age) instead.
+  double loop_wide_prior_sigma = 1.0;       ///< m
+  double loop_wide_confirm_distance = 2.0;  ///< m
   /// When the prior is wider than PSM's basin, guesses on a grid of this spacing over its
   /// loop_candidate_sigmas ellipse (at most loop_max_guesses, most likely first) are tried and
   /// the best converged match kept; one such wide search per reference decision.

@@ -72,14 +72,24 @@ void runPsmSlam(const std::string& world_file, uint64_t seed, PsmSlam& slam, Sla
   slam.optimize();
 }
 
+// With slopes over 5 cm and residual-scaled weights (core/scanmatch/README.md), seed 1091 came
+// round the corner with a 3 m prior, and two scans 0.65 m apart fitted the look-alike, its
+// neighbouring reference scans agreeing: from so wide a prior the second closure must now come
+// from 2 m farther along the path (loop_wide_confirm_distance), where the look-alike no longer fits.
 TEST(PsmSlamWrongClosure, LookAlikeCorridorIsNotTakenForTheStart) {
-  for (const uint64_t seed : {1033u, 1058u, 1091u, 1092u}) {
-    PsmSlam slam;
-    SlamSink sink(slam);
-    runPsmSlam("glass-partition-loop.yaml", seed, slam, sink);
-    ASSERT_FALSE(sink.truth.empty());
-    EXPECT_LT(maxPositionError(slam.trajectory(), sink.truth), 1.0) << "seed " << seed;
-    EXPECT_GE(slam.stats().loop_closures, 1u) << "seed " << seed << ": the right closure is still taken";
+  PsmSlamParams matcher_options;
+  matcher_options.psm.slope_half_span = 0.05;
+  matcher_options.psm.adaptive_weighting_scale = 4.0;
+  for (const PsmSlamParams& params : {PsmSlamParams{}, matcher_options}) {
+    for (const uint64_t seed : {1033u, 1058u, 1091u, 1092u}) {
+      PsmSlam slam(params);
+      SlamSink sink(slam);
+      runPsmSlam("glass-partition-loop.yaml", seed, slam, sink);
+      ASSERT_FALSE(sink.truth.empty());
+      const std::string run = "seed " + std::to_string(seed) + ", slopes over " + std::to_string(params.psm.slope_half_span);
+      EXPECT_LT(maxPositionError(slam.trajectory(), sink.truth), 1.0) << run;
+      EXPECT_GE(slam.stats().loop_closures, 1u) << run << ": the right closure is still taken";
+    }
   }
 }
 
