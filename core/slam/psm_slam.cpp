@@ -440,10 +440,6 @@ void PsmSlam::addGraphEdge(int64_t from, int64_t to, const Pose2& z, const Mat3&
   }
 }
 
-bool PsmSlam::needsConfirmation(const RelativePosePrediction& prediction) const {
-  return largestPositionSigma(prediction) > params_.loop_confirm_sigma;
-}
-
 bool PsmSlam::confirmedByHypothesis(const Pose2& robot, const Pose2& map_pose, double prior_sigma) const {
   // From a prior wider than a look-alike place's extent, two scans a few decimetres apart see the
   // same look-alike: the second closure must come from far enough along the path that the
@@ -498,7 +494,8 @@ PsmSlam::Verification PsmSlam::verifyWithNeighbours(int64_t closure, const Pose2
 
 bool PsmSlam::applyLoopClosure(const Candidate& c, const Observation& o, const PreparedScan& scan, const Pose2& mount) {
   double gate = params_.loop_chi2_gate;
-  if (needsConfirmation(c.prediction)) {
+  const double prior_sigma = largestPositionSigma(c.prediction);
+  if (prior_sigma > params_.loop_confirm_sigma) {
     // A wide prior lets an aliased match (a look-alike corridor) through the χ² gate. Two
     // independent checks: the closure's neighbouring reference scans must not see the robot
     // elsewhere, and a second closure from a later scan must agree on the motion in between.
@@ -512,11 +509,11 @@ bool PsmSlam::applyLoopClosure(const Candidate& c, const Observation& o, const P
     // at all. When the prior is wide (loop_unverified_max_extent, within the disc a loop search
     // examines), the robot may well be somewhere else that merely looks alike.
     if (verification == Verification::NoEvidence &&
-        params_.loop_candidate_sigmas * largestPositionSigma(c.prediction) > params_.loop_unverified_max_extent) {
+        params_.loop_candidate_sigmas * prior_sigma > params_.loop_unverified_max_extent) {
       ++stats_.loop_unverified;
       return false;
     }
-    if (!confirmedByHypothesis(robot, map_pose, largestPositionSigma(c.prediction))) {
+    if (!confirmedByHypothesis(robot, map_pose, prior_sigma)) {
       hypotheses_.push_back({stats_.scans, robot, map_pose});
       if (hypotheses_.size() > 32) hypotheses_.erase(hypotheses_.begin());
       ++stats_.loop_unconfirmed;

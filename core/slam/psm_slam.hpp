@@ -213,7 +213,6 @@ class PsmSlam {
   /// from the pose the closure implies.
   Verification verifyWithNeighbours(int64_t closure, const Pose2& closure_z, const PreparedScan& scan,
                                     const Pose2& mount);
-  bool needsConfirmation(const RelativePosePrediction& prediction) const;
   bool confirmedByHypothesis(const Pose2& robot, const Pose2& map_pose, double prior_sigma) const;
   std::vector<Candidate> referenceCandidates() const;
   /// Matches candidates, then reuses one or adds the scan as a keyframe. True if a loop closed.
