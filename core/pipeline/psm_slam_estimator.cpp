@@ -127,6 +127,10 @@ void PsmSlamEstimator::continueMap(const StoredMap& map, const Pose2& start, con
   for (const MapReferenceScan& s : map.scans) map_scans_.addStored(s.scan, s.anchor);
 }
 
+nlohmann::json refinementJson(const GraphRefinementSummary& r) {
+  return {{"pairs", r.pairs}, {"edges", r.edges}, {"poor", r.poor}, {"disagreed", r.disagreed}, {"seconds", r.seconds}};
+}
+
 nlohmann::json psmSlamReportJson(const PsmSlam& slam, const PoseGraphOptimizationSummary& final_optimization) {
   const PsmSlamStats& s = slam.stats();
   const PoseGraph& g = slam.graph();
@@ -158,18 +162,21 @@ nlohmann::json psmSlamReportJson(const PsmSlam& slam, const PoseGraphOptimizatio
             {"odometry_edges", g.countEdges(PoseGraphEdgeKind::Odometry)},
             {"match_edges", g.countEdges(PoseGraphEdgeKind::Match)},
             {"loop_edges", g.countEdges(PoseGraphEdgeKind::Loop)},
+            {"refinement_edges", g.countEdges(PoseGraphEdgeKind::Refinement)},
             {"inactive_edges", inactive}}},
           {"final_optimization", optimizationJson(final_optimization)}};
 }
 
 void PsmSlamEstimator::finish(const std::string& out_dir, nlohmann::json& report) {
   const auto start = std::chrono::steady_clock::now();
+  refinement_ = slam_.refine();
   const PoseGraphOptimizationSummary summary = slam_.optimize();
   final_ = reanchor(anchors_, slam_.graph());
   finished_ = true;
   slam_seconds_ += secondsSince(start);
   nlohmann::json section = psmSlamReportJson(slam_, summary);
   section["slam_seconds"] = slam_seconds_;
+  section["refinement"] = refinementJson(refinement_);
   section["sonar_filled_readings"] = sonar_filled_readings_;
   report["psm_slam"] = section;
   if (out_dir.empty()) {

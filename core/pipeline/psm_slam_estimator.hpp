@@ -101,6 +101,7 @@ class PsmSlamEstimator : public Estimator {
   std::vector<PoseStamped> online_, final_;
   std::vector<AnchoredPose> anchors_;  ///< one per scan
   bool finished_ = false;
+  GraphRefinementSummary refinement_;
   GraphScanStore map_scans_;           ///< the scans the map is built from
   double slam_seconds_ = 0.0;
   std::string save_map_dir_;
@@ -119,5 +120,7 @@ class PsmSlamEstimator : public Estimator {
 
 /// Report figures of a run: counts, optimisation, graph size.
 nlohmann::json psmSlamReportJson(const PsmSlam& slam, const PoseGraphOptimizationSummary& final_optimization);
+/// The final refinement's counts (report section psm_slam.refinement).
+nlohmann::json refinementJson(const GraphRefinementSummary& refinement);
 
 }  // namespace polarslam

@@ -93,8 +93,7 @@ SolveResult solveOnce(PoseGraph& graph, const PoseGraphOptimizerOptions& options
   for (const auto& e : graph.edges()) {
     if (!e.active) continue;
     ceres::LossFunction* loss =
-        e.kind == PoseGraphEdgeKind::Loop && options.loop_loss_scale > 0 ? new ceres::CauchyLoss(options.loop_loss_scale)
-                                                                         : nullptr;
+        disownable(e.kind) && options.loop_loss_scale > 0 ? new ceres::CauchyLoss(options.loop_loss_scale) : nullptr;
     problem.AddResidualBlock(RelativePoseCost::create(e), loss, &parameters[3 * graph.indexOf(e.from)],
                              &parameters[3 * graph.indexOf(e.to)]);
   }
@@ -129,7 +128,7 @@ SolveResult solveOnce(PoseGraph& graph, const PoseGraphOptimizerOptions& options
 size_t rejectOutlierLoops(PoseGraph& graph, double chi2_threshold) {
   size_t rejected = 0;
   for (auto& e : graph.edges()) {
-    if (!e.active || e.kind != PoseGraphEdgeKind::Loop) continue;
+    if (!e.active || !disownable(e.kind)) continue;
     if (edgeChiSquared(graph.node(e.from).pose, graph.node(e.to).pose, e) > chi2_threshold) {
       e.active = false;
       ++rejected;
@@ -145,6 +144,7 @@ const char* edgeKindName(PoseGraphEdgeKind kind) {
     case PoseGraphEdgeKind::Odometry: return "odometry";
     case PoseGraphEdgeKind::Match: return "match";
     case PoseGraphEdgeKind::Loop: return "loop";
+    case PoseGraphEdgeKind::Refinement: return "refinement";
   }
   return "unknown";
 }

@@ -18,8 +18,15 @@ enum class PoseGraphEdgeKind : int8_t {
   Odometry = 0,  ///< dead-reckoned (and filtered) motion: no usable match at this keyframe
   Match = 1,     ///< PSM match with the previous reference scan
   Loop = 2,      ///< PSM match with an older reference scan (a loop closure)
+  /// PSM match between two overlapping reference scans, added by the final refinement; robust
+  /// and checked like a loop closure.
+  Refinement = 3,
 };
 const char* edgeKindName(PoseGraphEdgeKind kind);
+/// Loop closures and refinement edges: the edges the optimiser may disown (robust loss, χ² rejection).
+inline bool disownable(PoseGraphEdgeKind kind) {
+  return kind == PoseGraphEdgeKind::Loop || kind == PoseGraphEdgeKind::Refinement;
+}
 
 struct PoseGraphNode {
   int64_t id = 0;     ///< keyframe id, unique and increasing

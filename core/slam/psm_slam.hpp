@@ -38,6 +38,7 @@
 #include "scanmatch/prepared_scan.hpp"
 #include "scanmatch/scan_matcher.hpp"
 #include "slam/pose_graph.hpp"
+#include "slam/psm_match.hpp"
 #include "slam/psm_slam_filter.hpp"
 #include "slam/psm_slam_params.hpp"
 
@@ -49,6 +50,14 @@ namespace polarslam {
 struct PsmSlamFilterSeed {
   int64_t active = -1;
   std::vector<std::pair<int64_t, Mat3>> keyframes;
+};
+
+struct GraphRefinementSummary {
+  size_t pairs = 0;          ///< pairs of reference scans matched
+  size_t edges = 0;          ///< good matches added to the graph
+  size_t poor = 0;           ///< failed, or error index or overlap too poor
+  size_t disagreed = 0;      ///< good, but away from where the graph puts the pair
+  double seconds = 0.0;      ///< the optimisation before and the matching
 };
 
 struct PsmSlamStats {
@@ -74,7 +83,7 @@ struct PsmSlamStats {
   size_t loop_refuted = 0;         ///< ... good, but a neighbouring reference scan matched elsewhere
   size_t loop_unverified = 0;      ///< ... good, but no neighbour matched and the prior is wider than a loop search
   size_t optimizations = 0;
-  size_t rejected_loop_edges = 0;  ///< loop edges the optimiser found inconsistent
+  size_t rejected_loop_edges = 0;  ///< loop and refinement edges the optimiser found inconsistent
   double optimization_seconds = 0.0;
   double last_optimization_seconds = 0.0;
   size_t odometry_rejected = 0;
@@ -131,6 +140,10 @@ class PsmSlam {
   PsmSlamScanResult addScan(const LaserScan& scan);
   /// Optimises the pose graph now and moves the filter and the trajectory with it.
   PoseGraphOptimizationSummary optimize();
+  /// The final refinement (GraphRefinementParams): optimises, matches overlapping reference
+  /// scans pairwise from the graph's poses and adds the good matches as refinement edges; the
+  /// caller's final optimize() weighs them.
+  GraphRefinementSummary refine();
 
   /// One pose per scan, in input order, following the current pose graph.
   std::vector<PoseStamped> trajectory() const;
@@ -228,6 +241,14 @@ class PsmSlam {
   bool skeletonCovers(const Pose2& pose) const;
   void marginaliseKeyframe(int64_t id);
   void syncGraphFromFilter();
+  /// The final refinement's pairs for `current`: the nearest earlier reference scans within
+  /// reach (GraphRefinementParams) that share no edge with it.
+  std::vector<int64_t> refinementPartners(const Keyframe& current,
+                                          const std::set<std::pair<int64_t, int64_t>>& joined) const;
+  /// `current` matched with `reference` from the graph's relative pose; a good match that agrees
+  /// with it, or nothing (counted in `summary`).
+  std::optional<RobotFrameMatch> refinementMatch(const Keyframe& reference, const Keyframe& current,
+                                                 GraphRefinementSummary& summary);
   void record(int64_t utime, PsmSlamScanResult& result);
   const Keyframe& keyframe(int64_t id) const { return keyframes_[static_cast<size_t>(id)]; }
 

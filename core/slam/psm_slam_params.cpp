@@ -116,6 +116,17 @@ void describeGraph(ParameterTable& t, PsmSlamParams& p) {
   t.integer("max_outlier_rounds", p.graph.max_outlier_rounds, 0, 100, "re-solves after deactivating edges");
 }
 
+void describeRefinement(ParameterTable& t, GraphRefinementParams& p) {
+  t.boolean("enabled", p.enabled, "at the end of a run, match overlapping reference scans pairwise into the graph");
+  t.number("max_distance", p.max_distance, 0.0, 100.0, "m: pairs of reference scans at most this far apart ...");
+  t.angle("max_heading_deg", p.max_heading, 0.0, 180.0, "... and this much turned");
+  t.integer("max_pairs_per_scan", p.max_pairs_per_scan, 0, 1000, "nearest earlier reference scans matched per scan");
+  t.number("max_error_index", p.max_error_index, 0.0, 10.0, "m: a refinement match's error index at most");
+  t.number("min_overlap", p.min_overlap, 0.0, 1.0, "a refinement match's overlap at least");
+  t.number("agree_translation", p.agree_translation, 0.0, 100.0, "m: a match this far from the graph's pose converged elsewhere");
+  t.angle("agree_rotation_deg", p.agree_rotation, 0.0, 180.0, "the same for heading");
+}
+
 void describeLocalization(ParameterTable& t, MapLocalizationParams& p) {
   t.boolean("temporary_mapping", p.temporary_mapping,
             "once placed, track by PSM SLAM over the fixed map with temporary reference scans");
@@ -166,6 +177,8 @@ void describePsmSlamParams(ParameterTable& table, PsmSlamParams& p) {
   describeStationary(table.section("stationary", "a robot standing still"), p);
   describeLoops(table.section("loop_closure", "loop closures"), p);
   describeGraph(table.section("graph", "global pose-graph optimisation"), p);
+  describeRefinement(table.section("refinement", "the end of a run: overlapping reference scans matched pairwise"),
+                     p.refinement);
   describeMatcher(table.section("psm", "the polar scan matcher"), p.psm);
   describeLocalization(table.section("localization", "localisation in a stored map (--load-map, --mode localize)"),
                        p.localization);

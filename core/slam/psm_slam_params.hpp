@@ -10,6 +10,28 @@
 
 namespace polarslam {
 
+/// The end of a run: every reference scan is matched against the other reference scans that
+/// overlap it, not only the one it was tracked against, and each good match becomes a graph
+/// edge (docs/algorithms.md §18): the per-match noise that one edge per scan leaves in the map
+/// averages out over several.
+struct GraphRefinementParams {
+  /// Off by default: docs/algorithms.md §18 says what it gains and what still stands in its way.
+  bool enabled = false;
+  /// Pairs of reference scans at most this far apart and this much turned, not yet joined by an
+  /// edge, are matched; of each scan's pairs with earlier scans, the nearest max_pairs_per_scan.
+  double max_distance = 2.5;             ///< m
+  double max_heading = deg2rad(90.0);
+  int max_pairs_per_scan = 12;
+  /// A match counts when its error index is that of a good tracking match, its overlap at least
+  /// min_overlap (the loop closures' 0.15 and a little), and it lands within agree_translation /
+  /// agree_rotation of where the optimised graph puts the pair (a match that far off converged
+  /// elsewhere; the robust loss and χ² rejection deal with the subtler ones).
+  double max_error_index = 0.10;         ///< m
+  double min_overlap = 0.2;
+  double agree_translation = 0.3;        ///< m
+  double agree_rotation = deg2rad(5.0);
+};
+
 /// Localisation in a stored map (map_localizer.hpp): `polarslam run --load-map M --mode localize`.
 struct MapLocalizationParams {
   /// Once placed in the map, the robot is tracked by PSM SLAM over the map held fixed, with
@@ -224,6 +246,9 @@ struct PsmSlamParams {
   /// Loop closures within this many new keyframes of the last optimisation wait for the next one
   /// (the filter has already applied them); the end of the run always optimises.
   int min_keyframes_between_optimizations = 15;
+
+  // --- final refinement (psm_slam_refinement.cpp) ---
+  GraphRefinementParams refinement;
 
   // --- localisation in a stored map ---
   MapLocalizationParams localization;

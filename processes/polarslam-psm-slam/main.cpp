@@ -99,6 +99,9 @@ std::string exitSummary(const nlohmann::json& report) {
     const nlohmann::json& p = report["psm_slam"];
     line += count(p, "scans") + " scans, " + count(p, "keyframes") + " reference scans, " + count(p, "loop_closures") +
             " loop closures, " + count(p, "optimizations") + " optimisations";
+    if (p.contains("refinement") && p["refinement"].value("pairs", 0) > 0)
+      line += ", final refinement: " + count(p["refinement"], "edges") + " edges of " + count(p["refinement"], "pairs") +
+              " pairs matched";
   }
   return line;
 }

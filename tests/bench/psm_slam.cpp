@@ -81,17 +81,20 @@ Result runPsmSlam(const CarmenLog& log, const PsmSlamParams& params, std::vector
   Result r{"PSM SLAM", {}, 0.0, {}};
   PsmSlam slam(params);
   PoseGraphOptimizationSummary final_summary;
+  GraphRefinementSummary refinement;
   std::vector<PoseStamped> online;
   online.reserve(static_cast<size_t>(log.laserCount()));
   r.seconds = secondsOf([&] {
     for (const auto& e : log.events)
       if (e.isLaser()) online.push_back(slam.addScan(e.laser()).pose);
       else slam.addOdometry(e.odometry());
+    refinement = slam.refine();
     final_summary = slam.optimize();
   });
   online_trajectory = std::move(online);
   r.trajectory = slam.trajectory();
   r.extra = psmSlamReportJson(slam, final_summary);
+  r.extra["refinement"] = refinementJson(refinement);
   return r;
 }
 

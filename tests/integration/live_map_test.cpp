@@ -8,6 +8,7 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <optional>
 #include <nlohmann/json.hpp>
@@ -38,9 +39,10 @@ namespace fs = std::filesystem;
 const std::string kLog = sourcePath("logs/office.lcmlog");
 const std::string kConfig = sourcePath("config/psm-slam.yaml");
 
-nlohmann::json runOffline(const fs::path& dir, const std::string& name, const std::vector<std::string>& options) {
+nlohmann::json runOffline(const fs::path& dir, const std::string& name, const std::vector<std::string>& options,
+                          const std::string& config = kConfig) {
   std::vector<std::string> argv{binPath("polarslam"), "run",    "--log", kLog, "--pipeline", "psm-slam", "--config",
-                                kConfig,               "--out", (dir / ("offline-" + name)).string()};
+                                config,                "--out", (dir / ("offline-" + name)).string()};
   argv.insert(argv.end(), options.begin(), options.end());
   EXPECT_EQ(runToEnd(argv, dir / ("offline-" + name + ".out"), 300s), 0) << readFile(dir / ("offline-" + name + ".out"));
   return readJson(dir / ("offline-" + name) / "report.json");
@@ -58,7 +60,8 @@ void requestSave() {
 /// `grid_options`, a polarslam-grid --source psm-slam runs beside it and writes its map into
 /// live-NAME-grid on exit.
 nlohmann::json runLive(const fs::path& dir, const std::string& name, const std::vector<std::string>& options,
-                       bool save_request = false, const std::optional<std::vector<std::string>>& grid_options = {}) {
+                       bool save_request = false, const std::optional<std::vector<std::string>>& grid_options = {},
+                       const std::string& config = kConfig) {
   const std::string recorded = (dir / ("live-" + name + ".lcmlog")).string();
   ChildProcess logger({"lcm-logger", "--quiet", "--force", recorded}, (dir / ("logger-" + name + ".out")).string());
   std::unique_ptr<ChildProcess> grid;
@@ -68,7 +71,7 @@ nlohmann::json runLive(const fs::path& dir, const std::string& name, const std::
     argv.insert(argv.end(), grid_options->begin(), grid_options->end());
     grid = std::make_unique<ChildProcess>(argv, (dir / ("grid-" + name + ".out")).string());
   }
-  std::vector<std::string> argv{binPath("polarslam-psm-slam"), "--config", kConfig};
+  std::vector<std::string> argv{binPath("polarslam-psm-slam"), "--config", config};
   argv.insert(argv.end(), options.begin(), options.end());
   ChildProcess slam(argv, (dir / ("slam-" + name + ".out")).string());
   std::this_thread::sleep_for(1500ms);  // both subscribed before the first message
@@ -97,6 +100,30 @@ nlohmann::json runLive(const fs::path& dir, const std::string& name, const std::
             0)
       << readFile(dir / ("scored-" + name + ".out"));
   return readJson(scored / "report.json");
+}
+
+// The final refinement (issue 19 item 1, refinement.enabled, off by default) runs where the live
+// process finishes, as `polarslam run` runs it: with it on, the live final trajectory is the offline one.
+TEST(LiveMap, TheFinalRefinementEndsLiveAsOffline) {
+  const fs::path dir = freshDir("live-refinement");
+  const std::string config = (dir / "psm-slam-refined.yaml").string();
+  std::string text = readFile(kConfig);
+  const std::string off = "refinement:  # the end of a run: overlapping reference scans matched pairwise\n  enabled: false";
+  const size_t at = text.find(off);
+  ASSERT_NE(at, std::string::npos) << "config/psm-slam.yaml no longer has refinement.enabled: false where expected";
+  text.replace(at + off.size() - 5, 5, "true ");
+  std::ofstream(config) << text;
+  const nlohmann::json offline = runOffline(dir, "refined", {}, config);
+  const nlohmann::json live = runLive(dir, "refined", {}, false, std::nullopt, config);
+  std::printf("final refinement on     offline  live\n");
+  std::printf("ATE RMSE, final [m]     %7.4f  %.4f\n", figure(offline, "ate_rmse_m"), figure(live, "ate_rmse_m"));
+  std::printf("refinement edges        %7zu\n", offline["psm_slam"]["refinement"].value("edges", size_t{0}));
+  EXPECT_GT(offline["psm_slam"]["refinement"].value("edges", size_t{0}), 50u) << offline["psm_slam"].dump();
+  EXPECT_NEAR(figure(live, "ate_rmse_m"), figure(offline, "ate_rmse_m"), 0.10 * figure(offline, "ate_rmse_m"));
+  const std::string edges = "final refinement: " + std::to_string(offline["psm_slam"]["refinement"].value("edges", size_t{0})) + " edges";
+  EXPECT_NE(readFile(dir / "slam-refined.out").find(edges), std::string::npos)
+      << "live, the same refinement edges as offline (" << edges << "): " << readFile(dir / "slam-refined.out");
+  if (!::testing::Test::HasFailure()) fs::remove_all(dir);
 }
 
 /// scans_stored of the last GRID_STATUS in a recorded log (-1: none).

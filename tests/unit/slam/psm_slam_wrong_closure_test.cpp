@@ -13,24 +13,12 @@
 #include "eval/trajectory_lookup.hpp"
 #include "pipeline/psm_slam_estimator.hpp"
 #include "robot/robot_description.hpp"
+#include "psm_slam_sim.hpp"
 #include "sim/simulator.hpp"
 #include "slam/psm_slam.hpp"
 
 namespace polarslam {
 namespace {
-
-class SlamSink : public SimSink {
- public:
-  explicit SlamSink(PsmSlam& slam) : slam_(slam) {}
-  void onLaser(const LaserScan& scan) override { slam_.addScan(scan); }
-  void onSonar(const SonarScan&) override {}
-  void onOdometry(const OdometryReading& odometry) override { slam_.addOdometry(odometry); }
-  void onGroundTruth(const PoseStamped& pose) override { truth.push_back(pose); }
-  std::vector<PoseStamped> truth;
-
- private:
-  PsmSlam& slam_;
-};
 
 /// Largest position error of the final trajectory, the truth taken in the start frame (where
 /// PSM SLAM puts its map origin).
@@ -45,30 +33,10 @@ double maxPositionError(const std::vector<PoseStamped>& estimate, std::vector<Po
   return worst;
 }
 
-/// Active loop edges of `graph` whose measurement lies more than 0.3 m or 5° from the true
-/// relative pose of their nodes (`truth` in the world frame, by time), and farther than their
-/// covariance allows (χ²₃(0.999)): along a corridor a match may be off by more and say so.
-size_t loopEdgesOffTheTruth(const PoseGraph& graph, const std::vector<PoseStamped>& truth) {
-  const TrajectoryLookup lookup(truth);
-  size_t off = 0;
-  for (const PoseGraphEdge& e : graph.edges()) {
-    if (e.kind != PoseGraphEdgeKind::Loop || !e.active) continue;
-    const auto a = lookup.interpolate(graph.node(e.from).utime, 100000);
-    const auto b = lookup.interpolate(graph.node(e.to).utime, 100000);
-    if (!a || !b) continue;
-    const Pose2 miss = between(between(*a, *b), e.measurement);
-    if ((miss.translation().norm() > 0.3 || std::abs(miss.theta) > deg2rad(5.0)) && edgeChiSquared(*a, *b, e) > 16.27) ++off;
-  }
-  return off;
-}
-
 /// PSM SLAM (default parameters) over the whole simulated run of `world_file` with `seed`, the
 /// graph optimised at the end; the sink keeps the truth.
-void runPsmSlam(const std::string& world_file, uint64_t seed, PsmSlam& slam, SlamSink& sink) {
-  const World world = loadWorld(std::string(POLARSLAM_SOURCE_DIR) + "/config/worlds/" + world_file);
-  const RobotDescription robot = loadRobotDescription(std::string(POLARSLAM_SOURCE_DIR) + "/config/robots/default.yaml");
-  Simulator sim(world, robot, seed);
-  while (!sim.finished() && sim.time() < 600.0) sim.step(sink);
+void runPsmSlam(const std::string& world_file, uint64_t seed, PsmSlam& slam, testing::PsmSlamSimSink& sink) {
+  testing::simulatePsmSlam(world_file, seed, sink);
   slam.optimize();
 }
 
@@ -83,7 +51,7 @@ TEST(PsmSlamWrongClosure, LookAlikeCorridorIsNotTakenForTheStart) {
   for (const PsmSlamParams& params : {PsmSlamParams{}, matcher_options}) {
     for (const uint64_t seed : {1033u, 1058u, 1091u, 1092u}) {
       PsmSlam slam(params);
-      SlamSink sink(slam);
+      testing::PsmSlamSimSink sink(slam);
       runPsmSlam("glass-partition-loop.yaml", seed, slam, sink);
       ASSERT_FALSE(sink.truth.empty());
       const std::string run = "seed " + std::to_string(seed) + ", slopes over " + std::to_string(params.psm.slope_half_span);
@@ -123,10 +91,10 @@ TEST(PsmSlamWrongClosure, SonarPlanesCarryTheLaserThroughTheGlassCorridor) {
 TEST(PsmSlamWrongClosure, TrackingBelievesTheOdometryWhereTheScanFitsTwoPlaces) {
   for (const uint64_t seed : {1013u, 1016u, 1026u, 1031u, 1034u}) {
     PsmSlam slam;
-    SlamSink sink(slam);
+    testing::PsmSlamSimSink sink(slam);
     runPsmSlam("office.yaml", seed, slam, sink);
     ASSERT_FALSE(sink.truth.empty());
-    EXPECT_EQ(loopEdgesOffTheTruth(slam.graph(), sink.truth), 0u) << "seed " << seed;
+    EXPECT_EQ(testing::edgesOffTheTruth(slam.graph(), sink.truth, PoseGraphEdgeKind::Loop), 0u) << "seed " << seed;
     EXPECT_GE(slam.stats().loop_closures, 1u) << "seed " << seed;
     EXPECT_LT(maxPositionError(slam.trajectory(), sink.truth), 0.75) << "seed " << seed;
   }
