@@ -81,4 +81,11 @@ AteResult evaluateAte(const std::vector<PoseStamped>& estimate, const std::vecto
   return result;
 }
 
+std::vector<PoseStamped> inStartFrame(std::vector<PoseStamped> poses) {
+  if (poses.empty()) return poses;
+  const Pose2 origin_inverse = poses.front().pose.inverse();
+  for (PoseStamped& p : poses) p.pose = origin_inverse * p.pose;
+  return poses;
+}
+
 }  // namespace polarslam

@@ -36,4 +36,8 @@ Pose2 alignRigid2d(const std::vector<Vec2>& source, const std::vector<Vec2>& tar
 AteResult evaluateAte(const std::vector<PoseStamped>& estimate, const std::vector<PoseStamped>& ground_truth,
                       const AteOptions& options = {});
 
+/// `poses` re-expressed in the frame of the first one: the robot's starting frame, which is the
+/// map frame of every estimator (ground truth is compared there).
+std::vector<PoseStamped> inStartFrame(std::vector<PoseStamped> poses);
+
 }  // namespace polarslam

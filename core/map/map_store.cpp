@@ -189,7 +189,7 @@ PoseGraph parseGraph(const std::string& text, const std::string& file) {
     edge.from = in.next<int64_t>("from");
     edge.to = in.next<int64_t>("to");
     const int kind = in.next<int>("kind");
-    if (kind < 0 || kind > static_cast<int>(PoseGraphEdgeKind::Refinement)) in.fail("unknown edge kind");
+    if (!isEdgeKind(kind)) in.fail("unknown edge kind");
     edge.kind = static_cast<PoseGraphEdgeKind>(kind);
     const int active = in.next<int>("active flag");
     if (active != 0 && active != 1) in.fail("active flag must be 0 or 1");

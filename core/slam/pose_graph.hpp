@@ -23,6 +23,8 @@ enum class PoseGraphEdgeKind : int8_t {
   Refinement = 3,
 };
 const char* edgeKindName(PoseGraphEdgeKind kind);
+/// Whether `value` (from a file or a message) is one of the kinds above.
+inline bool isEdgeKind(int value) { return value >= 0 && value <= static_cast<int>(PoseGraphEdgeKind::Refinement); }
 /// Loop closures and refinement edges: the edges the optimiser may disown (robust loss, χ² rejection).
 inline bool disownable(PoseGraphEdgeKind kind) {
   return kind == PoseGraphEdgeKind::Loop || kind == PoseGraphEdgeKind::Refinement;

@@ -61,7 +61,7 @@ std::string fromLcm(const polarslam::pose_graph_t& msg, PoseGraph& out) {
     }
     for (size_t i = 0; i < edges; ++i) {
       if (msg.edge_measurement[i].size() != 3 || msg.edge_cov[i].size() != 9) return "pose graph edge arrays have wrong sizes";
-      if (msg.edge_kind[i] < 0 || msg.edge_kind[i] > static_cast<int8_t>(PoseGraphEdgeKind::Refinement)) return "pose graph edge kind out of range";
+      if (!isEdgeKind(msg.edge_kind[i])) return "pose graph edge kind out of range";
       if (!allFinite(msg.edge_measurement[i]) || !allFinite(msg.edge_cov[i])) return "pose graph: non-finite edge";
       PoseGraphEdge e;
       e.from = msg.edge_from[i];

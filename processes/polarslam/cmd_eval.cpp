@@ -59,12 +59,6 @@ GroundTruthLog readGroundTruth(const std::string& path, const std::string& chann
   return truth;
 }
 
-/// The frame of the first ground-truth pose: where `polarslam run` puts every estimate's origin.
-void expressInStartFrame(std::vector<PoseStamped>& poses) {
-  const Pose2 origin_inverse = poses.front().pose.inverse();
-  for (PoseStamped& p : poses) p.pose = origin_inverse * p.pose;
-}
-
 void warnIfNothingEvaluated(const RelationMetric& metric, const std::vector<PoseStamped>& trajectory,
                             const std::vector<Relation>& relations) {
   if (metric.evaluated > 0 || relations.empty() || trajectory.empty()) return;
@@ -99,7 +93,7 @@ nlohmann::json evaluate(const EvalOptions& o) {
     return result;
   }
   GroundTruthLog truth = readGroundTruth(o.ground_truth, o.channel);
-  if (o.ground_truth_frame == "start") expressInStartFrame(truth.poses);
+  if (o.ground_truth_frame == "start") truth.poses = inStartFrame(std::move(truth.poses));
   result["ground_truth"] = {{"file", o.ground_truth},   {"channel", o.channel},
                             {"poses", truth.poses.size()}, {"undecodable", truth.undecodable},
                             {"invalid", truth.invalid},  {"frame", o.ground_truth_frame}};

@@ -139,14 +139,6 @@ void checkLaserData(const RunOptions& o, int64_t scans, int64_t usable_scans, nl
   report["warnings"].push_back(what);
 }
 
-/// Ground truth re-expressed in the robot's starting frame, which is the map frame of every estimator.
-std::vector<PoseStamped> inStartFrame(std::vector<PoseStamped> poses) {
-  if (poses.empty()) return poses;
-  const Pose2 origin_inverse = poses.front().pose.inverse();
-  for (auto& p : poses) p.pose = origin_inverse * p.pose;
-  return poses;
-}
-
 std::vector<Vec2> positions(const std::vector<PoseStamped>& poses) {
   std::vector<Vec2> out;
   out.reserve(poses.size());

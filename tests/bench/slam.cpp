@@ -110,13 +110,6 @@ struct RunResult {
   std::vector<std::string> trace;  ///< per second: error (robot frame) and std, for --nees-trace
 };
 
-std::vector<PoseStamped> inStartFrame(std::vector<PoseStamped> poses) {
-  if (poses.empty()) return poses;
-  const Pose2 inverse = poses.front().pose.inverse();
-  for (auto& p : poses) p.pose = inverse * p.pose;
-  return poses;
-}
-
 RunResult evaluate(FeatureSlamEstimator& e, const std::vector<PoseStamped>& truth, double run_seconds,
                    double wall_seconds, const Options& o) {
   RunResult r;

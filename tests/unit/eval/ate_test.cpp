@@ -29,6 +29,19 @@ std::vector<PoseStamped> moved(const std::vector<PoseStamped>& poses, const Pose
   return out;
 }
 
+TEST(Ate, InStartFrameMakesTheFirstPoseTheOriginAndKeepsTheRelativePoses) {
+  EXPECT_TRUE(inStartFrame({}).empty());
+  const std::vector<PoseStamped> world{{1, Pose2(2.0, 1.0, 0.5), Mat3::Zero()}, {2, Pose2(3.0, -1.0, -1.0), Mat3::Zero()}};
+  const std::vector<PoseStamped> start = inStartFrame(world);
+  ASSERT_EQ(start.size(), 2u);
+  EXPECT_NEAR(start[0].pose.translation().norm(), 0.0, 1e-12);
+  EXPECT_NEAR(start[0].pose.theta, 0.0, 1e-12);
+  const Pose2 expected = between(world[0].pose, world[1].pose);
+  EXPECT_NEAR((start[1].pose.translation() - expected.translation()).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(start[1].pose.theta, expected.theta, 1e-12);
+  EXPECT_EQ(start[1].utime, 2);
+}
+
 TEST(Ate, PureOffsetGivesRawErrorEqualToOffsetAndAlignedZero) {
   const std::vector<PoseStamped> truth = groundTruth();
   const AteResult r = evaluateAte(moved(truth, Pose2(0.3, -0.4, 0.0)), truth);

@@ -103,12 +103,6 @@ const SimulatedRun& officeRun() {
   return run;
 }
 
-std::vector<PoseStamped> inStartFrame(std::vector<PoseStamped> poses) {
-  const Pose2 inverse = poses.front().pose.inverse();
-  for (auto& p : poses) p.pose = inverse * p.pose;
-  return poses;
-}
-
 TEST(LaserFeatureStage, FusedSensorsBreakLaserSegmentsWhereTheSonarSawCornersAndEdges) {
   const SimulatedRun& run = officeRun();
   const FeaturePipelineConfig fused = loadFeaturePipelineConfig(sourcePath("config/ekf.yaml"), SlamSensors::Fused);

@@ -28,7 +28,7 @@ OfficeRun runOffice(uint64_t seed, bool refine) {
   OfficeRun run;
   run.refinement = slam.refine();
   slam.optimize();
-  run.ate = evaluateAte(slam.trajectory(), testing::inStartFrame(sink.truth)).raw_translation.rmse;
+  run.ate = evaluateAte(slam.trajectory(), inStartFrame(sink.truth)).raw_translation.rmse;
   run.edges_off_truth = testing::edgesOffTheTruth(slam.graph(), sink.truth, PoseGraphEdgeKind::Refinement);
   return run;
 }

@@ -33,14 +33,6 @@ inline void simulatePsmSlam(const std::string& world_file, uint64_t seed, PsmSla
   while (!sim.finished() && sim.time() < 600.0) sim.step(sink);
 }
 
-/// `truth` moved into the frame of its first pose (the frame PSM SLAM estimates in).
-inline std::vector<PoseStamped> inStartFrame(std::vector<PoseStamped> truth) {
-  if (truth.empty()) return truth;
-  const Pose2 start_inverse = truth.front().pose.inverse();
-  for (PoseStamped& p : truth) p.pose = start_inverse * p.pose;
-  return truth;
-}
-
 /// Active edges of `kind` off the truth as scripts/bench-slam counts them: more than 0.3 m or 5°
 /// from the true relative pose of their nodes (`truth` by time, in any fixed frame), and farther
 /// than their covariance allows (χ²₃(0.999)): along a corridor a match may be off by more and say so.

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "estimator_sim_sink.hpp"
+#include "eval/ate.hpp"
 #include "eval/trajectory_lookup.hpp"
 #include "pipeline/psm_slam_estimator.hpp"
 #include "robot/robot_description.hpp"
@@ -22,10 +23,8 @@ namespace {
 
 /// Largest position error of the final trajectory, the truth taken in the start frame (where
 /// PSM SLAM puts its map origin).
-double maxPositionError(const std::vector<PoseStamped>& estimate, std::vector<PoseStamped> truth) {
-  const Pose2 start_inverse = truth.front().pose.inverse();
-  for (PoseStamped& p : truth) p.pose = start_inverse * p.pose;
-  const TrajectoryLookup lookup(truth);
+double maxPositionError(const std::vector<PoseStamped>& estimate, const std::vector<PoseStamped>& truth) {
+  const TrajectoryLookup lookup(inStartFrame(truth));
   double worst = 0.0;
   for (const PoseStamped& p : estimate)
     if (const auto t = lookup.interpolate(p.utime, 100000))
