@@ -128,7 +128,8 @@ void PsmSlamEstimator::continueMap(const StoredMap& map, const Pose2& start, con
 }
 
 nlohmann::json refinementJson(const GraphRefinementSummary& r) {
-  return {{"pairs", r.pairs}, {"edges", r.edges}, {"poor", r.poor}, {"disagreed", r.disagreed}, {"seconds", r.seconds}};
+  return {{"pairs", r.pairs},   {"edges", r.edges},     {"poor", r.poor}, {"disagreed", r.disagreed},
+          {"seconds", r.seconds}, {"background_rounds", r.background_rounds}, {"final_seconds", r.final_seconds}};
 }
 
 nlohmann::json psmSlamReportJson(const PsmSlam& slam, const PoseGraphOptimizationSummary& final_optimization) {

@@ -697,7 +697,9 @@ PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
   if (loop_pending_ && params_.optimize_on_loop &&
       static_cast<int64_t>(keyframes_.size()) - keyframes_at_last_optimization_ >=
           params_.min_keyframes_between_optimizations) {
+    joinBackgroundRefinement();
     optimize();
+    startBackgroundRefinement();
     result.optimized = true;
   }
   record(scan.utime, result);

@@ -26,6 +26,7 @@
 // filter. Every scan's pose is stored relative to its reference scan, so the whole trajectory
 // follows the optimised graph.
 #include <cstdint>
+#include <future>
 #include <map>
 #include <optional>
 #include <set>
@@ -57,8 +58,40 @@ struct GraphRefinementSummary {
   size_t edges = 0;          ///< good matches added to the graph
   size_t poor = 0;           ///< failed, or error index or overlap too poor
   size_t disagreed = 0;      ///< good, but away from where the graph puts the pair
-  double seconds = 0.0;      ///< the optimisation before and the matching
+  double seconds = 0.0;      ///< matching, in the background and at the end
+  size_t background_rounds = 0;  ///< rounds after loop closures (online) whose edges joined the graph
+  double final_seconds = 0.0;    ///< the end of the run's refinement: optimisation and matching
+  GraphRefinementSummary& operator+=(const GraphRefinementSummary& other);
 };
+
+using NodePair = std::pair<int64_t, int64_t>;
+
+/// A refinement round's input, copied out of PsmSlam so that it can be matched beside it: each
+/// pair's relative pose as the graph had it, and the reference scans the pairs use.
+struct RefinementScan {
+  PreparedScan scan;
+  Pose2 mount;
+};
+struct RefinementPair {
+  int64_t reference = 0, current = 0;
+  Pose2 guess;  ///< current in the reference's robot frame, from the graph
+};
+struct RefinementJob {
+  std::vector<RefinementPair> pairs;
+  std::map<int64_t, RefinementScan> scans;
+};
+struct RefinementEdge {
+  int64_t from = 0, to = 0;
+  Pose2 z;
+  Mat3 R;  ///< the match's own covariance (before its scan's share)
+};
+struct RefinementOutcome {
+  std::vector<RefinementEdge> edges;
+  GraphRefinementSummary counts;
+};
+/// Matches each pair of `job` (a good match that agrees with the graph becomes an edge). Touches
+/// nothing but its arguments: safe on another thread.
+RefinementOutcome matchRefinementPairs(const RefinementJob& job, const PsmSlamParams& params);
 
 struct PsmSlamStats {
   size_t scans = 0;
@@ -140,9 +173,10 @@ class PsmSlam {
   PsmSlamScanResult addScan(const LaserScan& scan);
   /// Optimises the pose graph now and moves the filter and the trajectory with it.
   PoseGraphOptimizationSummary optimize();
-  /// The final refinement (GraphRefinementParams): optimises, matches overlapping reference
-  /// scans pairwise from the graph's poses and adds the good matches as refinement edges; the
-  /// caller's final optimize() weighs them.
+  /// The final refinement (GraphRefinementParams): takes the background round's edges, optimises,
+  /// matches the overlapping reference scans not yet tried pairwise from the graph's poses and
+  /// adds the good matches as refinement edges; the caller's final optimize() weighs them.
+  /// Returns the refinement's counts over the whole run.
   GraphRefinementSummary refine();
 
   /// One pose per scan, in input order, following the current pose graph.
@@ -241,14 +275,17 @@ class PsmSlam {
   bool skeletonCovers(const Pose2& pose) const;
   void marginaliseKeyframe(int64_t id);
   void syncGraphFromFilter();
-  /// The final refinement's pairs for `current`: the nearest earlier reference scans within
-  /// reach (GraphRefinementParams) that share no edge with it.
-  std::vector<int64_t> refinementPartners(const Keyframe& current,
-                                          const std::set<std::pair<int64_t, int64_t>>& joined) const;
-  /// `current` matched with `reference` from the graph's relative pose; a good match that agrees
-  /// with it, or nothing (counted in `summary`).
-  std::optional<RobotFrameMatch> refinementMatch(const Keyframe& reference, const Keyframe& current,
-                                                 GraphRefinementSummary& summary);
+  /// The refinement's pairs for `current`: the nearest earlier reference scans within reach
+  /// (GraphRefinementParams) but not in `excluded` (joined by an edge, or tried).
+  std::vector<int64_t> refinementPartners(const Keyframe& current, const std::set<NodePair>& excluded) const;
+  /// Every pair not yet tried, from the graph's poses now; marks them tried. `settled_only`: only
+  /// pairs of reference scans the filter no longer holds (it would not know why they moved).
+  RefinementJob refinementJob(bool settled_only);
+  void addRefinementEdges(const RefinementOutcome& outcome);
+  /// After a loop-closure optimisation (GraphRefinementParams::online).
+  void startBackgroundRefinement();
+  /// Waits for the background round and adds its edges; true if any joined the graph.
+  bool joinBackgroundRefinement();
   void record(int64_t utime, PsmSlamScanResult& result);
   const Keyframe& keyframe(int64_t id) const { return keyframes_[static_cast<size_t>(id)]; }
 
@@ -280,6 +317,9 @@ class PsmSlam {
   Pose2 last_scan_motion_;                 ///< robot motion between the last two scans
   int64_t keyframes_at_last_optimization_ = 0;
   bool loop_pending_ = false;              ///< closures not yet in an optimisation
+  std::set<NodePair> refinement_tried_;    ///< pairs matched by the refinement, good or not
+  GraphRefinementSummary refinement_;
+  std::future<RefinementOutcome> background_refinement_;  ///< matched since the last loop closure
 };
 
 }  // namespace polarslam

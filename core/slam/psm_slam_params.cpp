@@ -125,6 +125,7 @@ void describeRefinement(ParameterTable& t, GraphRefinementParams& p) {
   t.number("min_overlap", p.min_overlap, 0.0, 1.0, "a refinement match's overlap at least");
   t.number("agree_translation", p.agree_translation, 0.0, 100.0, "m: a match this far from the graph's pose converged elsewhere");
   t.angle("agree_rotation_deg", p.agree_rotation, 0.0, 180.0, "the same for heading");
+  t.boolean("online", p.online, "also after each loop closure, in the background (enabled only)");
 }
 
 void describeLocalization(ParameterTable& t, MapLocalizationParams& p) {

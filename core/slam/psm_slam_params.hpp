@@ -30,6 +30,11 @@ struct GraphRefinementParams {
   double min_overlap = 0.2;
   double agree_translation = 0.3;        ///< m
   double agree_rotation = deg2rad(5.0);
+  /// Also during the run: after each loop-closure optimisation the pairs of reference scans the
+  /// filter no longer holds are matched in the background, their edges joining the graph at the
+  /// next one. Off: the live poses get worse (each optimisation moves the filter's keyframes by
+  /// information it does not hold), and the final map no better (docs/algorithms.md §18).
+  bool online = false;
 };
 
 /// Localisation in a stored map (map_localizer.hpp): `polarslam run --load-map M --mode localize`.

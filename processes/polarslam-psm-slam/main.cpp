@@ -100,8 +100,8 @@ std::string exitSummary(const nlohmann::json& report) {
     line += count(p, "scans") + " scans, " + count(p, "keyframes") + " reference scans, " + count(p, "loop_closures") +
             " loop closures, " + count(p, "optimizations") + " optimisations";
     if (p.contains("refinement") && p["refinement"].value("pairs", 0) > 0)
-      line += ", final refinement: " + count(p["refinement"], "edges") + " edges of " + count(p["refinement"], "pairs") +
-              " pairs matched";
+      line += ", refinement: " + count(p["refinement"], "edges") + " edges of " + count(p["refinement"], "pairs") +
+              " pairs matched (" + count(p["refinement"], "background_rounds") + " rounds after loop closures)";
   }
   return line;
 }
