@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <set>
 
 #include "eval/trajectory_lookup.hpp"
 
@@ -49,6 +51,45 @@ RelationMetric evaluateRelations(const std::vector<PoseStamped>& trajectory, con
   metric.translation_squared = summarizeErrors(std::move(translation_sq));
   metric.rotation_squared = summarizeErrors(std::move(rotation_sq));
   return metric;
+}
+
+RelationConsistency relationConsistency(const std::vector<Relation>& relations) {
+  // Each pose's relations, both ways: (other pose's time, motion from this pose to it, relation index).
+  struct Leg {
+    int64_t to = 0;
+    Pose2 motion;
+    size_t index = 0;
+  };
+  std::map<int64_t, std::vector<Leg>> legs;
+  for (size_t i = 0; i < relations.size(); ++i) {
+    const Relation& r = relations[i];
+    if (r.t1 == r.t2) continue;
+    legs[r.t1].push_back({r.t2, r.motion(), i});
+    legs[r.t2].push_back({r.t1, r.motion().inverse(), i});
+  }
+  RelationConsistency out;
+  std::set<size_t> members;
+  std::vector<double> translation, rotation;
+  for (size_t i = 0; i < relations.size(); ++i) {  // each triangle once: by its relation of lowest index
+    const Relation& direct = relations[i];
+    if (direct.t1 == direct.t2) continue;
+    for (const Leg& first : legs[direct.t1]) {
+      if (first.index <= i || first.to == direct.t2) continue;
+      for (const Leg& second : legs[first.to]) {
+        if (second.to != direct.t2 || second.index <= i || second.index == first.index) continue;
+        const Pose2 miss = between(direct.motion(), first.motion * second.motion);
+        translation.push_back(miss.translation().norm());
+        rotation.push_back(rad2deg(std::abs(wrapAngle(miss.theta))));
+        members.insert({i, first.index, second.index});
+      }
+    }
+  }
+  out.triangles = translation.size();
+  out.relations.assign(members.begin(), members.end());
+  out.translation = summarizeErrors(std::move(translation));
+  out.rotation_deg = summarizeErrors(std::move(rotation));
+  out.per_relation_translation = out.translation.mean / std::sqrt(3.0);
+  return out;
 }
 
 std::vector<Relation> relationsFromGroundTruth(const std::vector<PoseStamped>& ground_truth, int64_t spacing_us) {

@@ -46,6 +46,20 @@ RelationMetric evaluateRelations(const std::vector<PoseStamped>& trajectory,
                                  const std::vector<Relation>& relations,
                                  const RelationMetricOptions& options = {});
 
+/// How well a relations file agrees with itself: wherever three relations join three poses
+/// (a→b, b→c and a→c, each in either direction), the first two composed against the third. For
+/// relations taken from one trajectory this is zero; relations measured one by one carry their own
+/// error, and no estimate can score below it on them. With the three relations' errors independent
+/// and alike, a triangle's inconsistency is √3 times one relation's: `per_relation_translation`.
+struct RelationConsistency {
+  size_t triangles = 0;
+  std::vector<size_t> relations;  ///< indices of the relations in at least one triangle, ascending
+  ErrorStatistics translation;    ///< m, per triangle
+  ErrorStatistics rotation_deg;   ///< deg, per triangle
+  double per_relation_translation = 0.0;  ///< m: translation.mean / √3
+};
+RelationConsistency relationConsistency(const std::vector<Relation>& relations);
+
 /// Relations taken from a ground-truth trajectory: from each ground-truth pose to the first one
 /// at least spacing_us later, then onward from that one (a chain covering the whole run).
 std::vector<Relation> relationsFromGroundTruth(const std::vector<PoseStamped>& ground_truth, int64_t spacing_us);

@@ -182,6 +182,34 @@ bool runOtherLogs(const std::string& data, const std::string& out, const PsmSlam
   return ok;
 }
 
+/// The relations' own error where they can be checked against each other (relationConsistency),
+/// next to PSM SLAM's error on those relations and on the others: a floor no estimate gets under.
+void printRelationFloor(const std::vector<Relation>& relations, const RelationMetric& slam, nlohmann::json& report) {
+  const RelationConsistency consistency = relationConsistency(relations);
+  std::vector<bool> in_triangle(relations.size(), false);
+  for (const size_t i : consistency.relations) in_triangle[i] = true;
+  double in_sum = 0.0, out_sum = 0.0;
+  size_t in_count = 0, out_count = 0;
+  for (const RelationError& e : slam.errors) {
+    (in_triangle[e.relation_index] ? in_sum : out_sum) += e.translation;
+    (in_triangle[e.relation_index] ? in_count : out_count) += 1;
+  }
+  const double in_mean = in_count ? in_sum / static_cast<double>(in_count) : 0.0;
+  const double out_mean = out_count ? out_sum / static_cast<double>(out_count) : 0.0;
+  std::printf("the relations' own error: %zu triangles of relations (a-b, b-c, a-c) disagree by %.4f m, %.3f deg "
+              "(mean), about %.4f m per relation;\n  PSM SLAM's error on the %zu relations in them %.4f m, on the "
+              "other %zu %.4f m\n",
+              consistency.triangles, consistency.translation.mean, consistency.rotation_deg.mean,
+              consistency.per_relation_translation, in_count, in_mean, out_count, out_mean);
+  report["relation_consistency"] = {{"triangles", consistency.triangles},
+                                    {"relations_in_triangles", consistency.relations.size()},
+                                    {"triangle_translation_m", statsJson(consistency.translation)},
+                                    {"triangle_rotation_deg", statsJson(consistency.rotation_deg)},
+                                    {"per_relation_translation_m", consistency.per_relation_translation},
+                                    {"psm_slam_error_in_triangles_m", in_mean},
+                                    {"psm_slam_error_elsewhere_m", out_mean}};
+}
+
 /// MIT CSAIL with its relations: raw odometry, PSM laser odometry and PSM SLAM side by side.
 void runMitCsail(const std::string& log_path, const std::string& relations_path, const std::string& out,
                  const std::string& config, nlohmann::json& report) {
@@ -246,6 +274,7 @@ void runMitCsail(const std::string& log_path, const std::string& relations_path,
               online_metric.rotation_deg.mean, online_metric.rotation_deg.std);
   report["psm_slam_online"] = {{"translation_m", statsJson(online_metric.translation)},
                                {"rotation_deg", statsJson(online_metric.rotation_deg)}};
+  printRelationFloor(relations, slam_metric, report);
   if (!out.empty()) writeTumTrajectory((std::filesystem::path(out) / "psm-slam-online.tum").string(), online);
 }
 

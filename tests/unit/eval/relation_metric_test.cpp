@@ -162,5 +162,38 @@ TEST(RelationMetric, RelationsFromGroundTruthChainAtTheSpacing) {
   EXPECT_NEAR(m.translation.max, 0.0, 1e-12);
 }
 
+/// The relation from `a` to `b` as a relations file states it, with `error` added to its x.
+Relation between(const PoseStamped& a, const PoseStamped& b, double error = 0.0) {
+  const Pose2 m = polarslam::between(a.pose, b.pose);
+  Relation r = relation(1e-6 * static_cast<double>(a.utime), 1e-6 * static_cast<double>(b.utime), m.x + error, m.y, m.theta);
+  return r;
+}
+
+TEST(RelationConsistency, RelationsOfOneTrajectoryCloseEveryTriangle) {
+  const PoseStamped a = at(0, 0, 0, 0), b = at(1, 1, 0.5, 0.7), c = at(2, 0.2, 2, 2.5), d = at(3, -1, 1, -2.0);
+  // Two triangles (a b c, a c d), one relation given backwards, and a relation in no triangle.
+  const std::vector<Relation> relations{between(a, b), between(b, c), between(c, a), between(c, d), between(a, d),
+                                        between(d, at(4, 5, 5, 0))};
+  const RelationConsistency consistency = relationConsistency(relations);
+  EXPECT_EQ(consistency.triangles, 2u);
+  EXPECT_EQ(consistency.relations, (std::vector<size_t>{0, 1, 2, 3, 4}));
+  EXPECT_NEAR(consistency.translation.max, 0.0, 1e-12);
+  EXPECT_NEAR(consistency.rotation_deg.max, 0.0, 1e-9);
+}
+
+TEST(RelationConsistency, ARelationsOwnErrorShowsInItsTriangles) {
+  const PoseStamped a = at(0, 0, 0, 0), b = at(1, 1, 0.5, 0.7), c = at(2, 0.2, 2, 2.5), d = at(3, -1, 1, -2.0);
+  // b→c is 3 cm off along x of b's frame: the one triangle holding it says so; a c d stays closed.
+  const std::vector<Relation> relations{between(a, b), between(b, c, 0.03), between(a, c), between(c, d), between(a, d)};
+  const RelationConsistency consistency = relationConsistency(relations);
+  ASSERT_EQ(consistency.triangles, 2u);
+  EXPECT_NEAR(consistency.translation.max, 0.03, 1e-9);
+  EXPECT_NEAR(consistency.translation.min, 0.0, 1e-9);
+  EXPECT_NEAR(consistency.per_relation_translation, 0.015 / std::sqrt(3.0), 1e-9);
+  // Without triangles there is nothing to compare.
+  EXPECT_EQ(relationConsistency({between(a, b), between(b, c)}).triangles, 0u);
+  EXPECT_EQ(relationConsistency({}).triangles, 0u);
+}
+
 }  // namespace
 }  // namespace polarslam
