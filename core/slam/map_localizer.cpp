@@ -312,9 +312,8 @@ std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& r
   return placeAmong(raw, scan, found, current);
 }
 
-std::optional<MapLocalizer::Fix> MapLocalizer::placeAmong(const LaserScan& raw, const PreparedScan& scan,
-                                                          const CorrelativeSearchResult& found, const Pose2& current) {
-  ++stats_.global_searches;
+std::vector<CorrelativeHit> MapLocalizer::rivalPlaces(const LaserScan& raw, const CorrelativeSearchResult& found,
+                                                      const Pose2& current) {
   // The places the scans fit about equally well: a place whose rays would pass through mapped walls
   // is not where the robot is (a corridor seen the wrong way round, a look-alike). Where the
   // robot is thought to be now sees through walls too, the map there is not one clean copy (a
@@ -330,6 +329,17 @@ std::optional<MapLocalizer::Fix> MapLocalizer::placeAmong(const LaserScan& raw, 
     else if (places.empty() || 1.0 - place.score <= options_.global_misfit_ratio * (1.0 - places.front().score))
       places.push_back(place);
   }
+  return places;
+}
+
+std::optional<MapLocalizer::Fix> MapLocalizer::placeAmong(const LaserScan& raw, const PreparedScan& scan,
+                                                          const CorrelativeSearchResult& found, const Pose2& current) {
+  ++stats_.global_searches;
+  return fixAmong(raw, scan, rivalPlaces(raw, found, current));
+}
+
+std::optional<MapLocalizer::Fix> MapLocalizer::fixAmong(const LaserScan& raw, const PreparedScan& scan,
+                                                        const std::vector<CorrelativeHit>& places) {
   if (places.empty()) return std::nullopt;
   if (places.size() > 1) {
     ++stats_.global_ambiguous;
@@ -389,7 +399,24 @@ bool MapLocalizer::foundElsewhere(const LaserScan& scan, const PreparedScan& pre
   const CorrelativeSearchResult found = correlative_->find(points, query);
   stats_.global_nodes += found.scored_nodes;
   if (!rivals_wanted) return false;  // no place, or the best is where the robot is tracked
-  const std::optional<Fix> place = placeAmong(scan, prepared, found, tracked);
+  ++stats_.global_searches;
+  const std::vector<CorrelativeHit> places = rivalPlaces(scan, found, tracked);
+  const auto near_tracked = [&](const CorrelativeHit& place) {
+    return isNear(place.pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading);
+  };
+  if (places.empty() || std::any_of(places.begin(), places.end(), near_tracked)) return false;
+  // Look-alike places, none of them where the robot is tracked, each explaining the scans
+  // markedly better and fitting the scan as a tracked pose beyond doubt does: wherever the robot
+  // is, it is not there (a kidnapping in a symmetric building); which of them it is, is for the
+  // searches while lost to settle. Places fitting less are no such evidence (on ground the map
+  // does not hold, a repetitive building offers many that fit most of a scan).
+  if (places.size() > 1) {
+    ++stats_.global_ambiguous;
+    const auto fits_fully = [&](const CorrelativeHit& place) { return field_->fit(scan, place.pose) >= options_.doubt_max_fit; };
+    return std::all_of(places.begin(), places.end(), fits_fully) &&
+           1.0 - tracked_score > options_.global_misfit_ratio * (1.0 - places.back().score);
+  }
+  const std::optional<Fix> place = fixAmong(scan, prepared, places);
   if (!place || isNear(place->pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading))
     return false;
   return 1.0 - tracked_score > options_.global_misfit_ratio * (1.0 - place->score);

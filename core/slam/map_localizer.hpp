@@ -196,6 +196,11 @@ class MapLocalizer {
   /// The unambiguous best of the places a search `found`, refined and checked, if any.
   std::optional<Fix> placeAmong(const LaserScan& raw, const PreparedScan& scan, const CorrelativeSearchResult& found,
                                 const Pose2& current);
+  /// The places a search `found` that could be where the robot is: seeing through no more mapped
+  /// walls than `current` allows, and misfitting at most global_misfit_ratio times the best.
+  std::vector<CorrelativeHit> rivalPlaces(const LaserScan& raw, const CorrelativeSearchResult& found, const Pose2& current);
+  /// The one of `places` refined and checked, if there is exactly one and it holds.
+  std::optional<Fix> fixAmong(const LaserScan& raw, const PreparedScan& scan, const std::vector<CorrelativeHit>& places);
   /// The fraction of `raw`'s rays a place may send through mapped walls: global_max_see_through, or
   /// half of what `current` sends through if more.
   double seeThroughLimit(const LaserScan& raw, const Pose2& current) const;
