@@ -147,7 +147,9 @@ void PsmSlam::startBackgroundRefinement() {
   if (!params_.refinement.enabled || !params_.refinement.online || background_refinement_.valid()) return;
   RefinementJob job = refinementJob(true);
   if (job.pairs.empty()) return;
-  background_refinement_ = std::async(std::launch::async, matchRefinementPairs, std::move(job), params_);
+  // On its own thread; where none can be started, when its edges are taken (the same edges).
+  background_refinement_ =
+      std::async(std::launch::async | std::launch::deferred, matchRefinementPairs, std::move(job), params_);
 }
 
 bool PsmSlam::joinBackgroundRefinement() {
