@@ -449,6 +449,12 @@ bool MapLocalizer::searchDue(const Pose2& predicted) const {
          !isNear(*last_search_at_, predicted, options_.global_search_spacing, options_.global_search_turn);
 }
 
+double MapLocalizer::pathLength(const std::vector<SearchedScan>& scans) {
+  double length = 0.0;
+  for (size_t i = 1; i < scans.size(); ++i) length += (scans[i].pose.translation() - scans[i - 1].pose.translation()).norm();
+  return length;
+}
+
 void MapLocalizer::searchAndConfirm(const LaserScan& raw, const PreparedScan& scan, const Pose2& predicted,
                                     MapLocalizationResult& result) {
   last_search_at_ = predicted;
@@ -457,8 +463,11 @@ void MapLocalizer::searchAndConfirm(const LaserScan& raw, const PreparedScan& sc
     hypothesis_.reset();
     return;
   }
-  const bool confirmed = hypothesis_ && isNear(hypothesis_->pose * between(hypothesis_->odometry_pose, predicted),
-                                             hit->pose, options_.confirm_translation, options_.confirm_rotation);
+  const bool seen_along_enough =
+      options_.confirm_sequence_length > 0.0 && pathLength(searched_) >= options_.confirm_sequence_length;
+  const bool confirmed =
+      seen_along_enough || (hypothesis_ && isNear(hypothesis_->pose * between(hypothesis_->odometry_pose, predicted),
+                                                  hit->pose, options_.confirm_translation, options_.confirm_rotation));
   if (!confirmed) {
     if (hypothesis_) ++stats_.global_unconfirmed;
     hypothesis_ = Hypothesis{hit->pose, predicted};

@@ -222,6 +222,8 @@ class MapLocalizer {
   /// At most global_points of the scan's readings within max_range, in the robot frame.
   std::vector<Vec2> searchPoints(const LaserScan& raw) const;
   void lose();
+  /// m travelled from the first of `scans` to the last, pose to pose.
+  static double pathLength(const std::vector<SearchedScan>& scans);
   void record(const MapLocalizationResult& result);
 
   PsmSlamParams params_;

@@ -159,6 +159,8 @@ void describeLocalization(ParameterTable& t, MapLocalizationParams& p) {
   t.number("doubt_max_fit", p.doubt_max_fit, 0.0, 1.0, "while tracked near the map, a scan fitting less searches globally");
   t.number("confirm_translation", p.confirm_translation, 0.0, 100.0, "m: two hits agree after the odometry");
   t.angle("confirm_rotation_deg", p.confirm_rotation, 0.0, 180.0, "the same for heading");
+  t.number("confirm_sequence_length", p.confirm_sequence_length, 0.0, 1000.0,
+           "m: a hit from scans seen along this much path needs no confirming search (0: always one)");
   t.number("tail_max_shift", p.tail_max_shift, 0.0, 1000.0, "m: a fix after a loss re-places the drifted scans before it ...");
   t.number("tail_shift_per_metre", p.tail_shift_per_metre, 0.0, 10.0, "... if it moves them this much more per metre at most ...");
   t.angle("tail_max_turn_deg", p.tail_max_turn, 0.0, 180.0, "... and turns them at most this ...");

@@ -99,6 +99,10 @@ struct MapLocalizationParams {
   /// The hit of the next search must agree with the previous one after the odometry in between.
   double confirm_translation = 0.15;     ///< m
   double confirm_rotation = deg2rad(5.0);
+  /// ... unless the hit's scans were seen along at least this much path: the search has then
+  /// placed views from several viewpoints already, which the next one would mostly repeat
+  /// (m; 0: always a confirming search).
+  double confirm_sequence_length = 1.5;
   /// Temporary mapping: the fix that ends the search after a loss re-places the lost stretch's
   /// scans since its last map match (they drifted on their own reference scans) when it moves the
   /// stretch's last pose by at most tail_max_shift + tail_shift_per_metre·d and turns it by at most

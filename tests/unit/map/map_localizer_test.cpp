@@ -27,11 +27,14 @@ PsmSlamEstimatorConfig testConfig() {
   return c;
 }
 
-StoredMap storedMapOfOneLap() {
+/// `refined`: mapped with the refinement (GraphRefinementParams) on.
+StoredMap storedMapOfOneLap(bool refined = false) {
   SyntheticRunOptions options;
   options.seed = 7;
   const SyntheticRun run = testing::simulateLoopRun(testing::makeLoopWorld(), options);
-  PsmSlamEstimator mapping(testConfig());
+  PsmSlamEstimatorConfig config = testConfig();
+  config.slam.refinement.enabled = refined;
+  PsmSlamEstimator mapping(config);
   for (size_t k = 0; k < run.scans.size(); ++k) {
     mapping.onOdometry(run.odometry[k]);
     mapping.onLaser(run.scans[k]);
@@ -250,13 +253,10 @@ TEST(MapLocalization, AKnownStartTracksOverTheFixedMap) {
   EXPECT_EQ(localization.map().graph.nodes().size(), map.graph.nodes().size());
 }
 
-// The kidnap of MapLocalizer.AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace with temporary
-// mapping (the default): scans near the map without a match with it lose the robot, the global
-// search finds it again, and every pose from a fix on is where the robot is. How soon is printed
-// (issue 15's goal: found again within 20 scans on every seed; with doubt_max_fit 0.9 one seed
-// was noticed late, its tracked pose along a look-alike stretch fitting 90-94 % of the scan).
-TEST(MapLocalization, AKidnappedRobotIsNoticedAndFoundAgainWhereItIs) {
-  const StoredMap map = storedMapOfOneLap();
+/// The kidnappings localised by temporary mapping (the default) in `map`: every pose before the
+/// kidnap placed within 0.1 m, every pose from the fix on within 0.3 m of the truth (no wrong
+/// lock-on); how soon each was noticed and found again.
+KidnapTally kidnapsWithTemporaryMapping(const StoredMap& map) {
   KidnapTally tally;
   for (const Kidnapping& kidnapping : kidnappings()) {
     const SyntheticRun& run = kidnapping.run;
@@ -278,10 +278,29 @@ TEST(MapLocalization, AKidnappedRobotIsNoticedAndFoundAgainWhereItIs) {
             << "seed " << seed << ": a wrong lock-on, scan " << k;
       }
     }
-    ASSERT_TRUE(noticed) << "seed " << seed << ": the kidnap at scan " << kidnap << " went unnoticed";
-    tally.add(kidnapping, *noticed, found_again);
+    EXPECT_TRUE(noticed) << "seed " << seed << ": the kidnap at scan " << kidnap << " went unnoticed";
+    if (noticed) tally.add(kidnapping, *noticed, found_again);
   }
+  return tally;
+}
+
+// The kidnap of MapLocalizer.AKidnappedRobotIsNoticedAndNeverLocksOnAWrongPlace with temporary
+// mapping (the default): scans near the map without a match with it lose the robot, the global
+// search finds it again, and every pose from a fix on is where the robot is. How soon is printed
+// (issue 15's goal: found again within 20 scans on every seed; with doubt_max_fit 0.9 one seed
+// was noticed late, its tracked pose along a look-alike stretch fitting 90-94 % of the scan).
+TEST(MapLocalization, AKidnappedRobotIsNoticedAndFoundAgainWhereItIs) {
+  const KidnapTally tally = kidnapsWithTemporaryMapping(storedMapOfOneLap());
   tally.print("temporary mapping");
+  EXPECT_EQ(tally.foundWithin20(), 20u) << "issue 15: every kidnap recovered within 20 scans";
+}
+
+// The same in a map made with the refinement: its look-alike places match each other better, so the
+// searches while lost stay ambiguous longer (seed 20: 16 scans). A hit from scans seen along 1.5 m
+// needs no confirming search (confirm_sequence_length); with one, seed 20 was found after 22 scans.
+TEST(MapLocalization, AKidnappedRobotIsFoundAgainInARefinedMapToo) {
+  const KidnapTally tally = kidnapsWithTemporaryMapping(storedMapOfOneLap(true));
+  tally.print("temporary mapping, refined map");
   EXPECT_EQ(tally.foundWithin20(), 20u) << "issue 15: every kidnap recovered within 20 scans";
 }
 
