@@ -276,8 +276,10 @@ class PsmSlam {
   void marginaliseKeyframe(int64_t id);
   void syncGraphFromFilter();
   /// The refinement's pairs for `current`: the nearest earlier reference scans within reach
-  /// (GraphRefinementParams) but not in `excluded` (joined by an edge, or tried).
-  std::vector<int64_t> refinementPartners(const Keyframe& current, const std::set<NodePair>& excluded) const;
+  /// (GraphRefinementParams) but not in `excluded` (joined by an edge, or tried), and with
+  /// `settled_only` none the filter still holds.
+  std::vector<int64_t> refinementPartners(const Keyframe& current, const std::set<NodePair>& excluded,
+                                          bool settled_only) const;
   /// Every pair not yet tried, from the graph's poses now; marks them tried. `settled_only`: only
   /// pairs of reference scans the filter no longer holds (it would not know why they moved).
   RefinementJob refinementJob(bool settled_only);

@@ -180,8 +180,9 @@ void describePsmSlamParams(ParameterTable& table, PsmSlamParams& p) {
   describeStationary(table.section("stationary", "a robot standing still"), p);
   describeLoops(table.section("loop_closure", "loop closures"), p);
   describeGraph(table.section("graph", "global pose-graph optimisation"), p);
-  describeRefinement(table.section("refinement", "the end of a run: overlapping reference scans matched pairwise"),
-                     p.refinement);
+  describeRefinement(
+      table.section("refinement", "overlapping reference scans matched pairwise: after loop closures and at the end of a run"),
+      p.refinement);
   describeMatcher(table.section("psm", "the polar scan matcher"), p.psm);
   describeLocalization(table.section("localization", "localisation in a stored map (--load-map, --mode localize)"),
                        p.localization);

@@ -256,7 +256,7 @@ struct PsmSlamParams {
   /// (the filter has already applied them); the end of the run always optimises.
   int min_keyframes_between_optimizations = 15;
 
-  // --- final refinement (psm_slam_refinement.cpp) ---
+  // --- refinement (psm_slam_refinement.cpp) ---
   GraphRefinementParams refinement;
 
   // --- localisation in a stored map ---

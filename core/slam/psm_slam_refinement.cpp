@@ -13,6 +13,7 @@
 #include <set>
 #include <utility>
 
+#include "io/stopwatch.hpp"
 #include "slam/psm_match.hpp"
 #include "slam/psm_slam.hpp"
 
@@ -23,10 +24,6 @@ std::set<NodePair> joinedPairs(const PoseGraph& graph) {
   std::set<NodePair> joined;
   for (const PoseGraphEdge& e : graph.edges()) joined.insert({std::min(e.from, e.to), std::max(e.from, e.to)});
   return joined;
-}
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 /// A good match that agrees with the graph's relative pose `guess`, or nothing (counted).
@@ -75,13 +72,15 @@ RefinementOutcome matchRefinementPairs(const RefinementJob& job, const PsmSlamPa
   return out;
 }
 
-std::vector<int64_t> PsmSlam::refinementPartners(const Keyframe& current, const std::set<NodePair>& excluded) const {
+std::vector<int64_t> PsmSlam::refinementPartners(const Keyframe& current, const std::set<NodePair>& excluded,
+                                                 bool settled_only) const {
   const GraphRefinementParams& p = params_.refinement;
   const Pose2 pose = graph_.node(current.id).pose;
   std::vector<std::pair<double, int64_t>> near;
   for (const Keyframe& other : keyframes_) {
     if (other.id >= current.id) break;
     if (other.scan.empty() || excluded.count({other.id, current.id})) continue;
+    if (settled_only && filter_keyframes_.count(other.id)) continue;
     const Pose2 relative = between(graph_.node(other.id).pose, pose);
     const double distance = relative.translation().norm();
     if (distance <= p.max_distance && std::abs(relative.theta) <= p.max_heading) near.emplace_back(distance, other.id);
@@ -99,15 +98,12 @@ RefinementJob PsmSlam::refinementJob(bool settled_only) {
   RefinementJob job;
   std::set<NodePair> excluded = joinedPairs(graph_);
   excluded.insert(refinement_tried_.begin(), refinement_tried_.end());
-  if (settled_only)
-    for (const int64_t id : filter_keyframes_)
-      for (const Keyframe& other : keyframes_) excluded.insert({std::min(id, other.id), std::max(id, other.id)});
   const int64_t first_own = map_frozen_ ? map_keyframes_ : 0;  // a frozen map's scans stay as they are
   for (const Keyframe& current : keyframes_) {
     if (current.scan.empty() || current.id < first_own) continue;
     if (settled_only && filter_keyframes_.count(current.id)) continue;
     const Pose2 pose = graph_.node(current.id).pose;
-    for (const int64_t id : refinementPartners(current, excluded)) {
+    for (const int64_t id : refinementPartners(current, excluded, settled_only)) {
       job.pairs.push_back({id, current.id, between(graph_.node(id).pose, pose)});
       refinement_tried_.insert({id, current.id});
       for (const int64_t used : {id, current.id})
