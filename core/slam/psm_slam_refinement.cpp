@@ -13,7 +13,6 @@
 #include <set>
 #include <utility>
 
-#include "io/stopwatch.hpp"
 #include "slam/psm_match.hpp"
 #include "slam/psm_slam.hpp"
 
@@ -24,6 +23,10 @@ std::set<NodePair> joinedPairs(const PoseGraph& graph) {
   std::set<NodePair> joined;
   for (const PoseGraphEdge& e : graph.edges()) joined.insert({std::min(e.from, e.to), std::max(e.from, e.to)});
   return joined;
+}
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 /// A good match that agrees with the graph's relative pose `guess`, or nothing (counted).
