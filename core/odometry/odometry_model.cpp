@@ -117,6 +117,15 @@ OdometryMotion poseMotion(const OdometryReading& from, const OdometryReading& to
   return m;
 }
 
+/// Wheel travel over seconds is no single arc, but the odometry poses integrate the real path:
+/// their difference is the increment. Its uncertainty is the sum of the two models' (the wheels'
+/// for the distance each one turned, the poses' for the chord): neither knows the path.
+OdometryMotion motionOverAGap(const OdometryReading& from, const OdometryReading& to, const OdometryModelParams& params) {
+  OdometryMotion m = poseMotion(from, to, params);
+  m.cov += wheelMotion(from, to, params).cov;
+  return m;
+}
+
 void requireNonNegative(double value, const char* name) {
   if (!(value >= 0.0) || !std::isfinite(value))
     throw std::invalid_argument(std::string("odometry model: ") + name + " must be finite and >= 0");
@@ -139,6 +148,9 @@ void validate(const OdometryModelParams& p) {
   requireNonNegative(p.poses.min_heading_sigma, "min_heading_sigma");
   requirePositive(p.max_translation, "max_translation");
   requirePositive(p.max_rotation, "max_rotation");
+  requireNonNegative(p.max_speed, "max_speed");
+  requireNonNegative(p.max_turn_rate, "max_turn_rate");
+  requirePositive(p.max_arc_interval, "max_arc_interval");
   requirePositive(p.max_substep_length, "max_substep_length");
   requirePositive(p.max_substep_angle, "max_substep_angle");
 }
@@ -210,16 +222,24 @@ OdometryMotionResult odometryMotion(const OdometryReading& from, const OdometryR
   const RawIncrement raw = rawIncrement(from, to, source, params.wheels.wheelbase);
   if (!std::isfinite(raw.distance) || !std::isfinite(raw.dtheta))
     return failure(OdometryFault::NonFinite, "odometry increment is not finite");
-  if (raw.distance > params.max_translation)
-    return failure(OdometryFault::TooLarge, "odometry jumped " + formatNumber(raw.distance) +
-                                                " m between two readings (limit " +
-                                                formatNumber(params.max_translation) + " m)");
-  if (std::abs(raw.dtheta) > params.max_rotation)
-    return failure(OdometryFault::TooLarge, "odometry turned " + formatNumber(std::abs(raw.dtheta)) +
-                                                " rad between two readings (limit " +
-                                                formatNumber(params.max_rotation) + " rad)");
+  // A restart or a dropped stretch leaves readings seconds apart: the robot may have gone as far
+  // as it can drive in that time.
+  const double dt = 1e-6 * static_cast<double>(to.utime - from.utime);
+  const double max_translation = std::max(params.max_translation, params.max_speed * dt);
+  const double max_rotation = std::max(params.max_rotation, params.max_turn_rate * dt);
+  if (raw.distance > max_translation)
+    return failure(OdometryFault::TooLarge, "odometry jumped " + formatNumber(raw.distance) + " m in " +
+                                                formatNumber(dt) + " s between two readings (limit " +
+                                                formatNumber(max_translation) + " m)");
+  if (std::abs(raw.dtheta) > max_rotation)
+    return failure(OdometryFault::TooLarge, "odometry turned " + formatNumber(std::abs(raw.dtheta)) + " rad in " +
+                                                formatNumber(dt) + " s between two readings (limit " +
+                                                formatNumber(max_rotation) + " rad)");
   OdometryMotionResult result;
-  result.motion = source == OdometrySource::WheelTravel ? wheelMotion(from, to, params) : poseMotion(from, to, params);
+  if (source != OdometrySource::WheelTravel) result.motion = poseMotion(from, to, params);
+  else if (dt <= params.max_arc_interval || !finitePose(from.pose) || !finitePose(to.pose))
+    result.motion = wheelMotion(from, to, params);
+  else result.motion = motionOverAGap(from, to, params);
   return result;
 }
 

@@ -49,8 +49,13 @@ struct OdometryModelParams {
   OdometrySource source = OdometrySource::Auto;
   WheelErrorParams wheels;
   PoseIncrementErrorParams poses;
-  double max_translation = 2.0;      ///< m: larger increments between two readings are rejected
-  double max_rotation = 1.6;         ///< rad: larger heading changes are rejected
+  double max_translation = 2.0;      ///< m: larger increments between two readings are rejected ...
+  double max_rotation = 1.6;         ///< rad: larger heading changes are rejected ...
+  double max_speed = 2.0;            ///< m/s: ... unless the readings are far enough apart in time
+  double max_turn_rate = 3.0;        ///< rad/s: ... for that
+  /// s: readings further apart (a restart, a dropped stretch) are not taken as one arc of the
+  /// wheels: the increment is the odometry poses' difference, which holds whatever the path.
+  double max_arc_interval = 0.5;
   double max_substep_length = 0.05;  ///< m: sub-step length when integrating an arc
   double max_substep_angle = 0.05;   ///< rad: sub-step heading change when integrating an arc
 };

@@ -104,6 +104,7 @@ double corridorDirection(const std::vector<double>& angles) {
 void fitSlopes(PreparedScan& out, double half_span, double increment) {
   const size_t n = out.size();
   out.slope.assign(n, std::numeric_limits<float>::quiet_NaN());
+  out.slope_variance.assign(n, std::numeric_limits<float>::quiet_NaN());
   if (n < 3) return;
   auto same = [&](size_t a, size_t b) { return out.segment[a] != 0 && out.segment[a] == out.segment[b]; };
   // Prefix sums of r and j·r: the slope over a symmetric window is then one difference.
@@ -124,8 +125,9 @@ void fitSlopes(PreparedScan& out, double half_span, double increment) {
     if (k < 1) continue;
     const size_t a = i - static_cast<size_t>(k), b = i + static_cast<size_t>(k) + 1;
     const double moment = (sum_jr[b] - sum_jr[a]) - static_cast<double>(i) * (sum_r[b] - sum_r[a]);
-    const double kd = k;
-    out.slope[i] = static_cast<float>(moment * 3.0 / (kd * (kd + 1.0) * (2.0 * kd + 1.0)));  // Σ j² = k(k+1)(2k+1)/3
+    const double kd = k, sum_j2 = kd * (kd + 1.0) * (2.0 * kd + 1.0) / 3.0;
+    out.slope[i] = static_cast<float>(moment / sum_j2);
+    out.slope_variance[i] = static_cast<float>(1.0 / sum_j2);
   }
 }
 
@@ -135,7 +137,7 @@ void computeSurfaceTerms(PreparedScan& scan) {
   const size_t n = scan.size();
   const BeamGeometry& g = *scan.geometry;
   auto& s = scan.surface;
-  for (auto* v : {&s.rho, &s.cos_beta, &s.normal_x, &s.normal_y, &s.rho_cos_beta})
+  for (auto* v : {&s.rho, &s.cos_beta, &s.normal_x, &s.normal_y, &s.rho_cos_beta, &s.beta_variance})
     v->assign(n, std::numeric_limits<double>::quiet_NaN());
   for (size_t j = 0; j < n; ++j) {
     const double slope = scan.slope[j] / g.angle_increment;  // ∂r/∂φ
@@ -148,6 +150,9 @@ void computeSurfaceTerms(PreparedScan& scan) {
     s.normal_x[j] = (co + rho * si) * cos_beta;
     s.normal_y[j] = (si - rho * co) * cos_beta;
     s.rho_cos_beta[j] = rho * cos_beta;
+    // ρ = (∂r/∂j)/(r·Δφ) and dβ/dρ = cos²β.
+    const double cos2 = cos_beta * cos_beta, arc = scan.range[j] * g.angle_increment;
+    s.beta_variance[j] = cos2 * cos2 * scan.slope_variance[j] / (arc * arc);
   }
 }
 

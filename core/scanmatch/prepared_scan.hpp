@@ -50,11 +50,15 @@ struct PreparedScan {
   std::vector<float> masked_range;///< range where usable, 0 otherwise (orientation search)
   std::vector<float> mask;        ///< 1 where usable, 0 otherwise
   std::vector<float> slope;       ///< dr/dj (m per beam) inside a segment (5-point fit), NaN elsewhere
+  /// var(slope)/σ_r² of each fitted slope, 3/(k(k+1)(2k+1)) for a fit over i−k…i+k (NaN where no slope).
+  std::vector<float> slope_variance;
   /// The reference-only part of PSM's surface Jacobian (§11.1), per bearing: ρ = (∂r/∂φ)/r
   /// (NaN where the slope is unknown), cos β = 1/√(1+ρ²), the unit surface normal terms
   /// (cos φ + ρ sin φ)·cos β and (sin φ − ρ cos φ)·cos β, and ρ·cos β.
   struct SurfaceTerms {
     std::vector<double> rho, cos_beta, normal_x, normal_y, rho_cos_beta;
+    /// var(β)/σ_r², β = atan ρ the angle between ray and surface normal, from the slope's fit.
+    std::vector<double> beta_variance;
   } surface;
   int valid_count = 0;
   CorridorInfo corridor;          ///< §11.2 parts 2–3, computed once per scan

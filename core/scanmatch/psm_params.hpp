@@ -129,6 +129,10 @@ struct PsmParams {
   /// the residuals are correlated and σ̂²(HᵀWH)⁻¹ alone is over-confident (mean NEES 4.8 on
   /// simulated office pairs). Calibrated by NEES, see README.
   double wls_inflation = 1.5;
+  /// Takes out of the WLS information what the noise of the reference's fitted slopes adds to it
+  /// (an errors-in-variables effect: noisy normals claim information along a corridor that the
+  /// ranges do not carry). See docs/algorithms.md §11.1.
+  bool slope_noise_correction = false;
   /// Added to the WLS covariance: errors the residuals cannot show (the straight-line
   /// interpolation, the bearing grid).
   double wls_floor_xy = 0.0005, wls_floor_theta = deg2rad(0.02);

@@ -649,6 +649,8 @@ ScanMatcher::JointSystem ScanMatcher::jointSystem(const PreparedScan& ref, const
   const double min_range = params_.min_range, max_range = params_.max_range;
   const double max_error = params_.max_error, max_slope = params_.max_slope;
   double a11 = 0, a12 = 0, a13 = 0, a22 = 0, a23 = 0, a33 = 0, g1 = 0, g2 = 0, g3 = 0;
+  const bool slope_noise = params_.slope_noise_correction;
+  Mat3 spurious = Mat3::Zero();
   double sum_w = 0.0, sum_we2 = 0.0, sum_abs = 0.0;
   int used = 0, gated = 0;
   const size_t n = ref.size();
@@ -680,8 +682,15 @@ ScanMatcher::JointSystem ScanMatcher::jointSystem(const PreparedScan& ref, const
     sum_w += w;
     sum_we2 += w * en * en;
     ++used;
+    if (slope_noise) {
+      // The normal (h1, h2) = (cos(φ−β), sin(φ−β)) turns with β; h3 with it.
+      const Vec3 u(h2, -h1, pose.y * h2 + pose.x * h1 - surface.cos_beta[j] * r);
+      const Vec3 h(h1, h2, h3);
+      spurious += (w * surface.beta_variance[j]) * (u * u.transpose() - h * h.transpose());
+    }
   }
   JointSystem system;
+  system.slope_noise = spurious;
   system.information << a11, a12, a13, a12, a22, a23, a13, a23, a33;
   system.gradient << g1, g2, g3;
   system.sum_w = sum_w;
@@ -703,7 +712,10 @@ Mat3 ScanMatcher::covarianceFrom(const JointSystem& system) const {
   // Directions the scans do not constrain (along a corridor) get the variance of a wild guess
   // across the sensor's range instead of what slope noise would suggest.
   const double free_variance = params_.max_range * params_.max_range / (params_.wls_inflation * sigma2);
-  Mat3 cov = params_.wls_inflation * sigma2 * ObservableSpace(system.information).inverse(free_variance);
+  // A residual is a reference reading less an interpolation between two current ones, so
+  // σ̂² ≈ 1.5·σ_r²; the slopes' noise is that of the reference's ranges.
+  const Mat3 information = system.information - (sigma2 / 1.5) * system.slope_noise;
+  Mat3 cov = params_.wls_inflation * sigma2 * ObservableSpace(information).inverse(free_variance);
   cov(0, 0) += params_.wls_floor_xy * params_.wls_floor_xy;
   cov(1, 1) += params_.wls_floor_xy * params_.wls_floor_xy;
   cov(2, 2) += params_.wls_floor_theta * params_.wls_floor_theta;

@@ -26,6 +26,8 @@ void describeMatcher(ParameterTable& t, PsmParams& p) {
       "covariance", {"wls", "heuristic"}, [&p](const std::string& w) { return parseCovarianceModel(w, p.covariance); },
       [&p] { return std::string(covarianceModelName(p.covariance)); }, "match covariance model");
   t.number("wls_inflation", p.wls_inflation, 0.1, 100.0, "multiplies the WLS covariance");
+  t.boolean("slope_noise_correction", p.slope_noise_correction,
+            "WLS covariance without the information the reference's slope noise claims");
 }
 
 void describeOdometry(ParameterTable& t, PoseIncrementErrorParams& p) {

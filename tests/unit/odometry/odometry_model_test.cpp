@@ -326,6 +326,59 @@ TEST(OdometryIntegrator, BadReadingsGiveErrorsNotCrashes) {
   EXPECT_EQ(odometryMotion(OdometryReading{}, spin, OdometryModelParams{}).fault, OdometryFault::NonFinite);
 }
 
+// A restart or a dropped stretch of messages: the readings on either side are seconds and metres
+// apart. The robot may have driven that far, and its wheel travel is no single arc any more,
+// but the odometry poses integrate the real path.
+TEST(OdometryIntegrator, ReadingsSecondsApartGiveThePosesDifference) {
+  OdometryModelParams params;
+  params.wheels.wheelbase = kWheelbase;
+  // Drives 2 m straight, a quarter circle of radius 1 m to the left, then 1.5 m straight, at
+  // 0.6 m/s; readings every 20 ms carry both the wheel travel and the integrated pose.
+  std::vector<OdometryReading> path(1);
+  const auto drive = [&](double distance, double radius) {
+    const double step = 0.012;
+    for (double done = 0.0; done < distance - 1e-9; done += step) {
+      OdometryReading r = path.back();
+      const double dr = std::isinf(radius) ? step : step * (radius + 0.5 * kWheelbase) / radius;
+      const double dl = std::isinf(radius) ? step : step * (radius - 0.5 * kWheelbase) / radius;
+      r.utime += 20000;
+      r.right_travel += dr;
+      r.left_travel += dl;
+      r.pose = differentialDriveStep(r.pose, dr, dl, kWheelbase);
+      path.push_back(r);
+    }
+  };
+  const double inf = std::numeric_limits<double>::infinity();
+  drive(2.0, inf);
+  drive(0.5 * std::numbers::pi, 1.0);
+  drive(1.5, inf);
+  OdometryIntegrator integrator(params);
+  ASSERT_TRUE(integrator.add(path.front()).ok());
+  const OdometryMotionResult gap = integrator.add(path.back());
+  ASSERT_TRUE(gap.ok()) << gap.error;
+  const Pose2 truth = between(path.front().pose, path.back().pose);
+  EXPECT_LT(between(gap.motion->delta, truth).translation().norm(), 1e-9);
+  EXPECT_NEAR(wrapAngle(gap.motion->delta.theta - truth.theta), 0.0, 1e-9);
+  // One arc of the same wheel travel would end far from where the robot is.
+  OdometryModelParams one_arc = params;
+  one_arc.max_arc_interval = 1e9;
+  const OdometryMotionResult arc = odometryMotion(path.front(), path.back(), one_arc);
+  ASSERT_TRUE(arc.ok());
+  EXPECT_GT(between(truth, arc.motion->delta).translation().norm(), 0.5);
+  // Its uncertainty is at least that of the wheels over the distance driven.
+  EXPECT_GT((gap.motion->cov.topLeftCorner<2, 2>().trace()), 1e-4);
+
+  // The same distance within a tenth of a second is a glitch, as before.
+  OdometryReading glitch = path.front();
+  glitch.utime += 100000;
+  glitch.pose = path.back().pose;
+  glitch.right_travel = path.back().right_travel;
+  glitch.left_travel = path.back().left_travel;
+  const OdometryMotionResult fast = odometryMotion(path.front(), glitch, params);
+  EXPECT_EQ(fast.fault, OdometryFault::TooLarge);
+  EXPECT_NE(fast.error.find("in 0.1 s"), std::string::npos) << fast.error;
+}
+
 TEST(OdometryIntegrator, RejectsInvalidParameters) {
   OdometryModelParams params;
   params.wheels.wheelbase = 0.0;
