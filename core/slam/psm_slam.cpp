@@ -243,7 +243,7 @@ std::optional<PsmSlam::Observation> PsmSlam::trackReference(const PreparedScan& 
   const Keyframe& reference = keyframe(active);
   const RelativePosePrediction prior = filter_.predictRelative(active);
   std::optional<Observation> best = matchKeyframe(reference, scan, mount, prior, false, false);
-  if (!have_odometry_) return best;
+  if (!have_odometry_ || !moving_as_before_) return best;
   // Real odometry goes stale for a few scans and then catches up in one jump. When it disagrees
   // with the robot's previous motion, match from that motion too and keep the better match.
   const Pose2 keyframe_pose = filter_.keyframePose(active);
@@ -287,6 +287,7 @@ bool PsmSlam::plausibleOdometryFault(const RelativePosePrediction& prior, const 
     return true;
   // Farther off, the match must agree with the robot's previous motion (constant velocity):
   // stale odometry that catches up in one jump is off by a whole scan's motion or more.
+  if (!moving_as_before_) return false;
   const Pose2 keyframe_pose = filter_.keyframePose(o.keyframe);
   const Pose2 constant_velocity = between(keyframe_pose, last_scan_pose_ * last_scan_motion_);
   const Pose2 disagreement = between(constant_velocity, o.z);
@@ -656,6 +657,10 @@ PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
   ++stats_.scans;
   PsmSlamScanResult result;
   startClock(scan.utime);
+  // The previous scan's motion says where the robot goes next only over one scan's interval: not
+  // after a restart or a stretch of lost scans (seconds in which the robot drove on).
+  moving_as_before_ = last_scan_utime_ && scan.utime - *last_scan_utime_ <= kMaxConstantVelocityInterval;
+  last_scan_utime_ = scan.utime;
   predictTo(scan.utime);
   std::optional<PreparedScan> prepared = prepareMatchableScan(scan, params_.psm);
   if (!prepared) {

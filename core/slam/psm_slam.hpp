@@ -315,6 +315,9 @@ class PsmSlam {
   bool odometry_still_ = false;            ///< odometry did not move between the last two scans
   int64_t filter_utime_ = 0;               ///< time the filter's robot pose refers to
   std::optional<int64_t> last_scan_utime_;
+  /// µs: scans further apart than this do not predict each other's motion (constant velocity).
+  static constexpr int64_t kMaxConstantVelocityInterval = 1'000'000;
+  bool moving_as_before_ = false;          ///< the last scan was at most that long before this one
   Pose2 last_scan_pose_;
   Pose2 last_scan_motion_;                 ///< robot motion between the last two scans
   int64_t keyframes_at_last_optimization_ = 0;

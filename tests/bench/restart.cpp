@@ -12,32 +12,14 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <variant>
 
 #include "io/stopwatch.hpp"
-#include "pipeline/psm_slam_session.hpp"
-#include "sim/simulator.hpp"
+#include "session_recording.hpp"
 
 using namespace polarslam;
 namespace fs = std::filesystem;
 
 namespace {
-
-using Message = std::variant<LaserScan, OdometryReading>;
-
-/// Keeps what a journal would hold: the laser and odometry messages in arrival order.
-struct Recorder : SimSink {
-  std::vector<Message> messages;
-  void onLaser(const LaserScan& scan) override { messages.emplace_back(scan); }
-  void onSonar(const SonarScan&) override {}
-  void onOdometry(const OdometryReading& odometry) override { messages.emplace_back(odometry); }
-  void onGroundTruth(const PoseStamped&) override {}
-};
-
-void feed(PsmSlamSession& session, const Message& m) {
-  if (const auto* scan = std::get_if<LaserScan>(&m)) session.onLaser(*scan);
-  else session.onOdometry(std::get<OdometryReading>(m));
-}
 
 uint64_t folderBytes(const fs::path& dir) {
   uint64_t bytes = 0;
@@ -59,7 +41,7 @@ int main(int argc, char** argv) {
   World world = loadWorld(world_path);
   world.path.loop = true;
   Simulator sim(world, loadRobotDescription(std::string(POLARSLAM_SOURCE_DIR) + "/config/robots/default.yaml"), 1);
-  Recorder recorder;
+  testing::SessionRecording recorder;
   auto start = std::chrono::steady_clock::now();
   while (sim.time() < hours * 3600.0) sim.step(recorder);
   std::printf("simulated %.1f h of %s: %zu messages in %.1f s\n", sim.time() / 3600.0, world_path.c_str(),
@@ -74,10 +56,10 @@ int main(int argc, char** argv) {
   double snapshot_seconds = 0.0, worst_snapshot = 0.0;
   int64_t last_snapshot = 0;
   start = std::chrono::steady_clock::now();
-  for (const Message& m : recorder.messages) {
-    feed(session, m);
+  for (size_t k = 0; k < recorder.messages.size(); ++k) {
+    recorder.feed(session, k);
     ++since_snapshot;
-    const auto* scan = std::get_if<LaserScan>(&m);
+    const auto* scan = std::get_if<LaserScan>(&recorder.messages[k]);
     if (!scan || !session.canSnapshot()) continue;
     if (last_snapshot == 0) last_snapshot = scan->utime;
     if (scan->utime - last_snapshot < static_cast<int64_t>(period * 1e6)) continue;
@@ -106,7 +88,7 @@ int main(int argc, char** argv) {
   PsmSlamSession resumed(config, snapshot->options);
   if (snapshot->last_odometry) resumed.onOdometry(*snapshot->last_odometry);
   for (size_t i = recorder.messages.size() - since_snapshot; i < recorder.messages.size(); ++i)
-    feed(resumed, recorder.messages[i]);
+    recorder.feed(resumed, i);
   const double restart = secondsSince(start);
   std::printf("%-58s %10s %10s\n", "figure", "measured", "goal");
   std::printf("%-58s %9.2fs %10s\n", "restart after the run (snapshot + journal since)", restart, "< 5 s");

@@ -10,37 +10,14 @@
 
 #include <cstdio>
 #include <filesystem>
-#include <variant>
 
 #include "eval/ate.hpp"
-#include "pipeline/psm_slam_session.hpp"
-#include "sim/simulator.hpp"
+#include "session_recording.hpp"
 
 using namespace polarslam;
 namespace fs = std::filesystem;
 
 namespace {
-
-using Message = std::variant<LaserScan, OdometryReading>;
-
-struct Recorder : SimSink {
-  std::vector<Message> messages;
-  std::vector<PoseStamped> truth;
-  void onLaser(const LaserScan& scan) override { messages.emplace_back(scan); }
-  void onSonar(const SonarScan&) override {}
-  void onOdometry(const OdometryReading& odometry) override { messages.emplace_back(odometry); }
-  void onGroundTruth(const PoseStamped& p) override { truth.push_back(p); }
-};
-
-int64_t utimeOf(const Message& m) {
-  if (const auto* scan = std::get_if<LaserScan>(&m)) return scan->utime;
-  return std::get<OdometryReading>(m).utime;
-}
-
-void feed(PsmSlamSession& session, const Message& m) {
-  if (const auto* scan = std::get_if<LaserScan>(&m)) session.onLaser(*scan);
-  else session.onOdometry(std::get<OdometryReading>(m));
-}
 
 double ateOf(const std::vector<PoseStamped>& estimate, const std::vector<PoseStamped>& truth, int64_t from) {
   std::vector<PoseStamped> kept;
@@ -71,11 +48,11 @@ int main(int argc, char** argv) {
     World world = loadWorld(world_path);
     Simulator sim(world, loadRobotDescription(std::string(POLARSLAM_SOURCE_DIR) + "/config/robots/default.yaml"),
                   static_cast<uint64_t>(seed));
-    Recorder rec;
+    testing::SessionRecording rec;
     while (!sim.finished()) sim.step(rec);
     rec.truth = inStartFrame(rec.truth);
     PsmSlamSession undisturbed(config, {});
-    for (const Message& m : rec.messages) feed(undisturbed, m);
+    for (size_t k = 0; k < rec.messages.size(); ++k) rec.feed(undisturbed, k);
     undisturbed.finish();
 
     const fs::path dir = fs::temp_directory_path() / ("polarslam-resume-exp-" + std::to_string(::getpid()));
@@ -83,14 +60,13 @@ int main(int argc, char** argv) {
     fs::create_directories(dir);
     const std::string snapshot_dir = (dir / "snap").string();
     PsmSlamSession first(config, {});
-    const int64_t t0 = utimeOf(rec.messages.front());
+    const int64_t t0 = rec.utime(0);
     int64_t last_snapshot = 0;
     size_t snapshot_index = 0, k = 0;
     for (; k < rec.messages.size(); ++k) {
-      const Message& m = rec.messages[k];
-      if (utimeOf(m) - t0 > static_cast<int64_t>(kill * 1e6)) break;
-      feed(first, m);
-      const auto* scan = std::get_if<LaserScan>(&m);
+      if (rec.utime(k) - t0 > static_cast<int64_t>(kill * 1e6)) break;
+      rec.feed(first, k);
+      const auto* scan = std::get_if<LaserScan>(&rec.messages[k]);
       if (!scan || !first.canSnapshot()) continue;
       if (last_snapshot == 0) last_snapshot = scan->utime;
       if (scan->utime - last_snapshot < static_cast<int64_t>(period * 1e6)) continue;
@@ -101,10 +77,10 @@ int main(int argc, char** argv) {
     const std::optional<SessionSnapshot> snapshot = readSessionSnapshot(snapshot_dir, {});
     PsmSlamSession resumed(config, snapshot->options);
     if (snapshot->last_odometry) resumed.onOdometry(*snapshot->last_odometry);
-    for (size_t i = snapshot_index; i < k; ++i) feed(resumed, rec.messages[i]);  // the journal
-    const int64_t back = utimeOf(rec.messages[k]) + static_cast<int64_t>(gap * 1e6);
+    for (size_t i = snapshot_index; i < k; ++i) rec.feed(resumed, i);  // the journal
+    const int64_t back = rec.utime(k) + static_cast<int64_t>(gap * 1e6);
     for (size_t i = k; i < rec.messages.size(); ++i)
-      if (utimeOf(rec.messages[i]) >= back) feed(resumed, rec.messages[i]);
+      if (rec.utime(i) >= back) rec.feed(resumed, i);
     const nlohmann::json report = resumed.finish();
     const int64_t from = resumed.finalTrajectory().front().utime;
     const double u = ateOf(undisturbed.finalTrajectory(), rec.truth, from);
