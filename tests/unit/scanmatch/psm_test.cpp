@@ -326,6 +326,26 @@ TEST(Covariance, SlopesOverCentimetresAreConsistentInCorridorsNearTheirWalls) {
   EXPECT_LT(nees, 4.0);
 }
 
+TEST(Covariance, WithoutTheSlopeNoisesInformationCorridorsAreConsistentAndRoomsUnchanged) {
+  // slope_noise_correction takes E[ĥĥᵀ] − hhᵀ = var(β)(uuᵀ − hhᵀ) out of the information
+  // instead (core/scanmatch/README.md); the matches themselves are the default's.
+  PsmParams params;
+  params.slope_noise_correction = true;
+  auto corridor = scenePairs(fixtures::officeCorridor(), {-12.0, -0.55}, {12.0, 0.55}, 500, 31, 0.1, deg2rad(5.0), 0.01,
+                             params);
+  int used = 0;
+  const double corridor_nees = printedMeanNees(corridor, params, "corridor (slope noise out)", used);
+  EXPECT_GT(used, 490);
+  EXPECT_GT(corridor_nees, 2.5);
+  EXPECT_LT(corridor_nees, 3.5);
+  const PsmParams plain;
+  int used_plain = 0;
+  EXPECT_GT(meanNees(corridor, plain, used_plain), 1.4 * corridor_nees) << "the default's tail along the corridor";
+  auto rooms = officePairs(200, 32, 0.1, deg2rad(5.0), 0.01, params);
+  const double room_nees = printedMeanNees(rooms, params, "room (slope noise out)", used);
+  EXPECT_NEAR(room_nees, meanNees(rooms, plain, used_plain), 0.15);
+}
+
 TEST(Covariance, HeuristicIsFarTooCautiousInRooms) {
   PsmParams params;
   params.covariance = CovarianceModel::Heuristic;
