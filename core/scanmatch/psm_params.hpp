@@ -131,7 +131,7 @@ struct PsmParams {
   double wls_inflation = 1.5;
   /// Takes out of the WLS information what the noise of the reference's fitted slopes adds to it
   /// (an errors-in-variables effect: noisy normals claim information along a corridor that the
-  /// ranges do not carry). See docs/algorithms.md §11.1.
+  /// ranges do not carry). See core/scanmatch/README.md, "Taking the slope noise's information out".
   bool slope_noise_correction = false;
   /// Added to the WLS covariance: errors the residuals cannot show (the straight-line
   /// interpolation, the bearing grid).

@@ -71,8 +71,8 @@ class ScanMatcher {
   /// Jacobian (§11.1), plus the sums the covariance and the error index need.
   struct JointSystem {
     Mat3 information = Mat3::Zero();
-    /// Σ w·var(β)/σ_r²·u uᵀ, u = ∂h/∂β: what slope noise adds to `information` per unit range
-    /// variance (accumulated only with slope_noise_correction).
+    /// Σ w·var(β)/σ_r²·(uuᵀ − hhᵀ), u = ∂h/∂β: what slope noise adds to `information` per unit
+    /// range variance, to second order (accumulated only with slope_noise_correction).
     Mat3 slope_noise = Mat3::Zero();
     Vec3 gradient = Vec3::Zero();
     double sum_w = 0.0, sum_we2 = 0.0;

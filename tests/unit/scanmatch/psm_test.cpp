@@ -122,6 +122,13 @@ std::vector<PairCase> officePairs(int count, uint64_t seed, double max_error, do
                     noise_sigma, params);
 }
 
+/// Pairs along the office corridor with doors, anywhere across its width.
+std::vector<PairCase> corridorPairs(int count, uint64_t seed, double max_error, double max_rotation,
+                                    double noise_sigma, const PsmParams& params) {
+  return scenePairs(fixtures::officeCorridor(), {-12.0, -0.55}, {12.0, 0.55}, count, seed, max_error, max_rotation,
+                    noise_sigma, params);
+}
+
 struct Outcome {
   double success_rate = 0.0, mean_translation = 0.0, mean_rotation = 0.0;
 };
@@ -317,8 +324,7 @@ TEST(Covariance, SlopesOverCentimetresAreConsistentInCorridorsNearTheirWalls) {
   // corridor; why 5 cm is not the default: core/scanmatch/README.md).
   PsmParams params;
   params.slope_half_span = 0.05;
-  auto pairs = scenePairs(fixtures::officeCorridor(), {-12.0, -0.55}, {12.0, 0.55}, 500, 31, 0.1, deg2rad(5.0), 0.01,
-                          params);
+  auto pairs = corridorPairs(500, 31, 0.1, deg2rad(5.0), 0.01, params);
   int used = 0;
   const double nees = printedMeanNees(pairs, params, "corridor", used);
   EXPECT_GT(used, 490);
@@ -331,8 +337,7 @@ TEST(Covariance, WithoutTheSlopeNoisesInformationCorridorsAreConsistentAndRoomsU
   // instead (core/scanmatch/README.md); the matches themselves are the default's.
   PsmParams params;
   params.slope_noise_correction = true;
-  auto corridor = scenePairs(fixtures::officeCorridor(), {-12.0, -0.55}, {12.0, 0.55}, 500, 31, 0.1, deg2rad(5.0), 0.01,
-                             params);
+  auto corridor = corridorPairs(500, 31, 0.1, deg2rad(5.0), 0.01, params);
   int used = 0;
   const double corridor_nees = printedMeanNees(corridor, params, "corridor (slope noise out)", used);
   EXPECT_GT(used, 490);
