@@ -28,6 +28,7 @@ const char* const kGraphFile = "graph.txt";
 const char* const kScansFile = "scans.txt";
 const char* const kParametersFile = "parameters.yaml";
 const char* const kResumeFile = "resume.json";
+const char* const kResumeFilterFile = "resume-filter.bin";
 const char* const kUncertaintyFile = "uncertainty.json";
 
 std::string uncertaintyJson(const std::vector<std::pair<int64_t, Mat3>>& covariances) {
@@ -344,6 +345,7 @@ void writeMapFolder(const std::string& folder, const StoredMap& map, const Occup
   add(kScansFile, scansText(map.scans));
   add(kParametersFile, map.parameters_yaml);
   if (!map.resume_json.empty()) add(kResumeFile, map.resume_json);
+  if (!map.resume_filter.empty()) add(kResumeFilterFile, map.resume_filter);
   if (!map.node_covariances.empty()) add(kUncertaintyFile, uncertaintyJson(map.node_covariances));
   if (grid) {
     const GridFiles written = writeGridFiles(folder, *grid);
@@ -507,6 +509,7 @@ StoredMap loadMap(const std::string& dir, const std::optional<LaserGeometry>& ex
   }
   map.parameters_yaml = readCheckedFile(dir, files, kParametersFile);
   if (files.contains(kResumeFile)) map.resume_json = readCheckedFile(dir, files, kResumeFile);
+  if (files.contains(kResumeFilterFile)) map.resume_filter = readCheckedFile(dir, files, kResumeFilterFile);
   if (files.contains(kUncertaintyFile))
     map.node_covariances =
         parseUncertainty(readCheckedFile(dir, files, kUncertaintyFile), dir + "/" + kUncertaintyFile, map.graph);

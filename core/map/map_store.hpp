@@ -58,6 +58,9 @@ struct StoredMap {
   std::string parameters_yaml;  ///< the effective configuration (ParameterTable::yaml())
   /// A crash-recovery snapshot's process state (resume.json; empty in a map saved for users).
   std::string resume_json;
+  /// A snapshot's filter state (resume-filter.bin): raw doubles of the machine that wrote it,
+  /// whose layout resume.json describes.
+  std::string resume_filter;
   /// The filter's marginal covariance of each node's pose in the map frame, where known
   /// (uncertainty.json): how far the map itself may be off, for continuing it.
   std::vector<std::pair<int64_t, Mat3>> node_covariances;

@@ -1,6 +1,7 @@
 #include "pipeline/psm_slam_session.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <sstream>
 #include <stdexcept>
@@ -8,6 +9,36 @@
 #include "map/map_store.hpp"
 
 namespace polarslam {
+namespace {
+
+// resume-filter.bin: the filter's mean, then its covariance's lower triangle row by row, as the
+// doubles of the machine that wrote it (a snapshot is read back where it was written).
+constexpr const char* kResumeFilterLayout = "resume-filter.bin: mean, covariance lower triangle by rows, float64";
+
+std::string filterStateBytes(const PsmSlamFilterState& state) {
+  std::vector<double> values(state.mean.data(), state.mean.data() + state.mean.size());
+  for (Eigen::Index r = 0; r < state.cov.rows(); ++r)
+    for (Eigen::Index c = 0; c <= r; ++c) values.push_back(state.cov(r, c));
+  return std::string(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(double));
+}
+
+void readFilterStateBytes(const std::string& bytes, const std::string& file, PsmSlamFilterState& state) {
+  const Eigen::Index n = static_cast<Eigen::Index>(3 * (state.ids.size() + 1));
+  const size_t count = static_cast<size_t>(n + n * (n + 1) / 2);
+  if (bytes.size() != count * sizeof(double))
+    throw MapFormatError(file, "'" + file + "' holds " + std::to_string(bytes.size()) + " bytes; the filter of " +
+                                   std::to_string(state.ids.size()) + " keyframes needs " +
+                                   std::to_string(count * sizeof(double)));
+  std::vector<double> values(count);
+  std::memcpy(values.data(), bytes.data(), bytes.size());
+  state.mean = Eigen::Map<const Eigen::VectorXd>(values.data(), n);
+  state.cov.resize(n, n);
+  size_t next = static_cast<size_t>(n);
+  for (Eigen::Index r = 0; r < n; ++r)
+    for (Eigen::Index c = 0; c <= r; ++c) state.cov(r, c) = state.cov(c, r) = values[next++];
+}
+
+}  // namespace
 
 Pose2 parseInitialPose(const std::string& text) {
   std::istringstream in(text);
@@ -137,13 +168,14 @@ void PsmSlamSession::writeSnapshot(const std::string& dir, nlohmann::json resume
   const Mat3 cov = slam.uncertaintyFromRobot(slam.filter().activeKeyframe());
   resume["pose"] = poseJson(slam.currentPose());
   const PsmSlamFilterSeed seed = slam.filterSeed();
-  nlohmann::json keyframes = nlohmann::json::array();
-  for (const auto& [id, keyframe_cov] : seed.keyframes)
-    keyframes.push_back({{"id", id}, {"covariance", std::vector<double>(keyframe_cov.data(), keyframe_cov.data() + 9)}});
-  resume["filter"] = {{"active", seed.active}, {"keyframes", keyframes}};
+  resume["filter"] = {{"active", seed.filter.active},
+                      {"keyframes", seed.filter.ids},
+                      {"skeleton", seed.skeleton},
+                      {"state", std::string(kResumeFilterLayout)}};
   resume["covariance"] = std::vector<double>(cov.data(), cov.data() + 9);
   StoredMap map = m->storedMap();
   map.resume_json = resume.dump(1) + "\n";
+  map.resume_filter = filterStateBytes(seed.filter);
   saveMap(dir, map, nullptr);
 }
 
@@ -165,10 +197,14 @@ std::optional<SessionSnapshot> readSessionSnapshot(const std::string& dir, const
     }
     if (snapshot.options.mode == "continue") {
       snapshot.options.save_map = options.save_map;
+      const nlohmann::json& filter = snapshot.resume.at("filter");
+      if (filter.value("state", "") != kResumeFilterLayout)
+        throw MapFormatError(file, "'" + file + "' was written by an older polarslam: its filter cannot be resumed");
       PsmSlamFilterSeed seed;
-      seed.active = snapshot.resume.at("filter").at("active").get<int64_t>();
-      for (const nlohmann::json& k : snapshot.resume.at("filter").at("keyframes"))
-        seed.keyframes.emplace_back(k.at("id").get<int64_t>(), covarianceFromJson(k.at("covariance"), file));
+      seed.filter.active = filter.at("active").get<int64_t>();
+      seed.filter.ids = filter.at("keyframes").get<std::vector<int64_t>>();
+      seed.skeleton = filter.at("skeleton").get<std::vector<int64_t>>();
+      readFilterStateBytes(map.resume_filter, dir + "/resume-filter.bin", seed.filter);
       snapshot.options.filter_seed = seed;
     }
     if (snapshot.resume.contains("last_odometry")) {

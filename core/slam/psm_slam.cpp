@@ -76,24 +76,26 @@ void PsmSlam::continueMap(const PoseGraph& graph, const std::vector<LaserScan>& 
   last_scan_pose_ = start_pose;
   started_ = true;
   if (seed) {
-    addSeedKeyframes(*seed);  // its own map: map_keyframes_ stays 0
+    restoreFilter(*seed);  // its own map: map_keyframes_ stays 0
   } else {
     map_keyframes_ = static_cast<int64_t>(keyframes_.size());
     addMapSkeleton(start_pose);
   }
 }
 
-void PsmSlam::addSeedKeyframes(const PsmSlamFilterSeed& seed) {
-  for (const auto& [id, cov] : seed.keyframes) {
+void PsmSlam::restoreFilter(const PsmSlamFilterSeed& seed) {
+  for (const int64_t id : seed.filter.ids) {
     if (id < 0 || id >= static_cast<int64_t>(keyframes_.size()) || keyframe(id).scan.empty())
       throw std::invalid_argument("the snapshot's filter keyframe " + std::to_string(id) + " is not a matchable map node");
-    filter_.addIndependentKeyframe(id, graph_.node(id).pose, cov);
-    filter_keyframes_.insert(id);
+  }
+  filter_.restore(seed.filter);
+  filter_keyframes_.insert(seed.filter.ids.begin(), seed.filter.ids.end());
+  for (const int64_t id : seed.skeleton) {
+    if (!filter_keyframes_.count(id))
+      throw std::invalid_argument("the snapshot's skeleton keyframe " + std::to_string(id) + " is not in its filter");
     skeleton_.insert(id);
   }
-  if (!filter_.hasKeyframe(seed.active))
-    throw std::invalid_argument("the snapshot's active keyframe " + std::to_string(seed.active) + " is not in its filter");
-  filter_.setActiveKeyframe(seed.active);
+  last_scan_pose_ = filter_.robotPose();
 }
 
 std::vector<std::pair<int64_t, Mat3>> PsmSlam::nodeCovariances() const {
@@ -115,12 +117,7 @@ Mat3 PsmSlam::uncertaintyFromRobot(int64_t id) const {
 }
 
 PsmSlamFilterSeed PsmSlam::filterSeed() const {
-  PsmSlamFilterSeed seed;
-  seed.active = filter_.activeKeyframe();
-  for (const int64_t id : filter_keyframes_) {
-    seed.keyframes.emplace_back(id, uncertaintyFromRobot(id) + covarianceFloor(1e-4, 1e-5));
-  }
-  return seed;
+  return {filter_.exportState(), std::vector<int64_t>(skeleton_.begin(), skeleton_.end())};
 }
 
 void PsmSlam::addMapSkeleton(const Pose2& start_pose) {

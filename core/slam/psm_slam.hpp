@@ -45,12 +45,11 @@
 
 namespace polarslam {
 
-/// The filter of a run resumed from a snapshot: its keyframes, each with its covariance in the
-/// map frame as seen from the robot (so that the uncertainty of a loop back to it is kept), and
-/// the active one.
+/// The filter of a run resumed from a snapshot: the whole filter state, and which of its
+/// keyframes are the skeleton kept for loop closure (the others are the recent window).
 struct PsmSlamFilterSeed {
-  int64_t active = -1;
-  std::vector<std::pair<int64_t, Mat3>> keyframes;
+  PsmSlamFilterState filter;
+  std::vector<int64_t> skeleton;
 };
 
 struct GraphRefinementSummary {
@@ -148,8 +147,9 @@ class PsmSlam {
   /// join the filter as known poses, thinned as the skeleton is; matches with them are loop
   /// closures. Throws std::invalid_argument for a graph the scans do not cover or with no
   /// matchable scan.
-  /// With `seed` (a run resumed from its own snapshot) the filter holds the seed's keyframes
-  /// instead, and the map's keyframes are this run's own: loop closures follow the usual rules.
+  /// With `seed` (a run resumed from its own snapshot) the filter is the seed's, robot included
+  /// (`start` and `start_cov` are then not used), and the map's keyframes are this run's own:
+  /// loop closures follow the usual rules.
   /// `node_covariances`: the map's own uncertainty where its saver knew it (nodeCovariances());
   /// the map's keyframes join the filter with it instead of as known poses.
   void continueMap(const PoseGraph& graph, const std::vector<LaserScan>& references, const Pose2& start,
@@ -230,7 +230,7 @@ class PsmSlam {
   /// The first message's time starts the filter's clock.
   void startClock(int64_t utime);
   void addMapSkeleton(const Pose2& start);
-  void addSeedKeyframes(const PsmSlamFilterSeed& seed);
+  void restoreFilter(const PsmSlamFilterSeed& seed);
   void predictTo(int64_t utime);
   std::optional<Observation> matchKeyframe(const Keyframe& keyframe, const PreparedScan& scan, const Pose2& mount,
                                            const RelativePosePrediction& prior, bool loop_candidate, bool wide_search);

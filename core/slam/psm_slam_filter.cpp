@@ -289,6 +289,55 @@ void PsmSlamFilter::setKeyframePoses(const std::unordered_map<int64_t, Pose2>& p
   loadLocal();
 }
 
+PsmSlamFilterState PsmSlamFilter::exportState() const {
+  PsmSlamFilter flushed = *this;
+  flushed.flush();
+  PsmSlamFilterState state;
+  state.active = active_id_;
+  std::vector<std::pair<int64_t, size_t>> keyframes(slot_of_.begin(), slot_of_.end());
+  std::sort(keyframes.begin(), keyframes.end());
+  std::vector<Eigen::Index> from{0};  // state offset of each exported pose in the slots
+  for (const auto& [id, slot] : keyframes) {
+    state.ids.push_back(id);
+    from.push_back(offset(slot));
+  }
+  const Eigen::Index n = static_cast<Eigen::Index>(3 * from.size());
+  state.mean.resize(n);
+  state.cov.resize(n, n);
+  for (size_t i = 0; i < from.size(); ++i) {
+    const Eigen::Index row = static_cast<Eigen::Index>(3 * i);
+    state.mean.segment<3>(row) = flushed.x_.segment<3>(from[i]);
+    for (size_t j = 0; j < from.size(); ++j)
+      state.cov.block<3, 3>(row, static_cast<Eigen::Index>(3 * j)) = flushed.block(from[i], from[j]);
+  }
+  return state;
+}
+
+void PsmSlamFilter::restore(const PsmSlamFilterState& state) {
+  const Eigen::Index n = static_cast<Eigen::Index>(3 * (state.ids.size() + 1));
+  if (state.mean.size() != n || state.cov.rows() != n || state.cov.cols() != n)
+    throw std::invalid_argument("a filter state of " + std::to_string(state.ids.size()) + " keyframes needs " +
+                                std::to_string(n) + " values and a " + std::to_string(n) + "² covariance");
+  if (!state.mean.allFinite() || !state.cov.allFinite())
+    throw std::invalid_argument("the filter state holds a value that is not finite");
+  reset(Pose2(Vec3(state.mean.head<3>())), state.cov.topLeftCorner<3, 3>());
+  ensureCapacity(state.ids.size() + 1);
+  for (const int64_t id : state.ids) {
+    if (!slot_of_.emplace(id, slot_end_++).second)
+      throw std::invalid_argument("the filter state holds keyframe " + std::to_string(id) + " twice");
+  }
+  x_.head(n) = state.mean;
+  P_.topLeftCorner(n, n).triangularView<Eigen::Lower>() = state.cov.triangularView<Eigen::Lower>();
+  if (state.active >= 0 || !state.ids.empty()) {
+    if (!hasKeyframe(state.active))
+      throw std::invalid_argument("the filter state's active keyframe " + std::to_string(state.active) +
+                                  " is not one of its keyframes");
+    active_id_ = state.active;
+    active_slot_ = slotOf(state.active);
+  }
+  loadLocal();
+}
+
 Eigen::VectorXd PsmSlamFilter::stateMean() {
   flush();
   return x_.head(static_cast<Eigen::Index>(dimension()));

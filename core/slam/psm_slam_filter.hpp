@@ -40,6 +40,15 @@ struct RelativePoseJacobians {
 };
 RelativePoseJacobians relativePoseJacobians(const Pose2& keyframe, const Pose2& robot);
 
+/// The whole filter, for a crash-recovery snapshot: the robot and every keyframe with all their
+/// correlations, so that a resumed run goes on exactly as the killed one would have.
+struct PsmSlamFilterState {
+  std::vector<int64_t> ids;  ///< keyframes, in the order of `mean` and `cov` after the robot
+  Eigen::VectorXd mean;      ///< robot, then the keyframes: 3 + 3·ids.size()
+  Eigen::MatrixXd cov;       ///< the joint covariance of `mean`
+  int64_t active = -1;
+};
+
 class PsmSlamFilter {
  public:
   /// Starts over with the robot at `pose` with covariance `cov` and no keyframes.
@@ -80,6 +89,13 @@ class PsmSlamFilter {
   size_t dimension() const { return 3 * slot_end_; }
   /// How many O(n²) passes (compressed updates applied to the whole state) have run.
   size_t flushCount() const { return flushes_; }
+
+  /// The whole state with its pending updates applied; the filter itself is left as it is, so
+  /// that taking a snapshot does not change the run's rounding.
+  PsmSlamFilterState exportState() const;
+  /// Replaces the filter with `state`. Throws std::invalid_argument on a state that is not one
+  /// (sizes that disagree, a keyframe twice, an active keyframe it lacks, a non-finite value).
+  void restore(const PsmSlamFilterState& state);
 
   /// The full state mean and covariance (applies pending updates first); for tests and tools.
   Eigen::VectorXd stateMean();

@@ -310,5 +310,98 @@ TEST(PsmSlamFilter, NewPosesMoveTheRobotWithItsKeyframe) {
   EXPECT_NEAR(filter.keyframePose(0).x, 0.0, 1e-12);
 }
 
+/// The same random run of predictions, updates, new and removed keyframes, for two filters.
+void driveAtRandom(std::mt19937_64& rng, PsmSlamFilter& filter, int steps, int64_t& next_id) {
+  std::normal_distribution<double> unit(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  for (int step = 0; step < steps; ++step) {
+    filter.predict(Pose2(0.2 + 0.05 * unit(rng), 0.02 * unit(rng), 0.1 * unit(rng)), diag3(4e-4, 1e-4, 3e-4));
+    const double choice = uniform(rng);
+    if (choice < 0.15) {
+      filter.addKeyframe(next_id++);
+    } else if (choice < 0.2 && filter.keyframeCount() > 3) {
+      const int64_t oldest = next_id - static_cast<int64_t>(filter.keyframeCount()) - 1;
+      for (int64_t id = 0; id < next_id; ++id)
+        if (id != filter.activeKeyframe() && id > oldest && filter.hasKeyframe(id)) {
+          filter.removeKeyframe(id);
+          break;
+        }
+    } else {
+      int64_t k = filter.activeKeyframe();
+      if (choice > 0.8) {
+        k = static_cast<int64_t>(uniform(rng) * static_cast<double>(next_id));
+        if (!filter.hasKeyframe(k)) k = filter.activeKeyframe();
+      }
+      const Pose2 guess = filter.predictRelative(k).mean;
+      filter.update(k, Pose2(guess.x + 0.03 * unit(rng), guess.y + 0.03 * unit(rng), guess.theta + 0.01 * unit(rng)),
+                    diag3(1e-3, 2e-3, 2e-4), 1e9);
+    }
+  }
+}
+
+TEST(PsmSlamFilter, ARestoredStateGoesOnAsTheFilterItCameFrom) {
+  std::mt19937_64 rng(5);
+  PsmSlamFilter original;
+  original.reset(Pose2(0.5, -0.2, 0.3), diag3(1e-3, 2e-3, 1e-4));
+  original.addKeyframe(0);
+  int64_t next_id = 1;
+  driveAtRandom(rng, original, 80, next_id);
+  // Two freed slots, which the export compacts, and updates pending, which it applies to a copy.
+  for (int removed = 0, id = 0; removed < 2; ++id)
+    if (original.hasKeyframe(id) && id != original.activeKeyframe()) {
+      original.removeKeyframe(id);
+      ++removed;
+    }
+  original.predict(Pose2(0.3, 0.0, 0.05), diag3(4e-4, 1e-4, 3e-4));
+  original.update(original.activeKeyframe(), original.predictRelative(original.activeKeyframe()).mean,
+                  diag3(1e-3, 2e-3, 2e-4), 1e9);
+  const size_t flushes = original.flushCount();
+  const PsmSlamFilterState state = original.exportState();
+  EXPECT_EQ(original.flushCount(), flushes);
+  ASSERT_EQ(state.ids.size(), original.keyframeCount());
+  EXPECT_LT(state.ids.size() + 1, original.dimension() / 3) << "the run should free slots, so that they are compacted";
+
+  PsmSlamFilter restored;
+  restored.restore(state);
+  EXPECT_EQ(restored.activeKeyframe(), original.activeKeyframe());
+  EXPECT_EQ(restored.dimension(), 3 * (state.ids.size() + 1));
+  std::mt19937_64 same_rng = rng;
+  int64_t same_next_id = next_id;
+  driveAtRandom(rng, original, 40, next_id);
+  driveAtRandom(same_rng, restored, 40, same_next_id);
+  EXPECT_LT((restored.robotPose().vec() - original.robotPose().vec()).norm(), 1e-9);
+  EXPECT_LT((restored.robotCovariance() - original.robotCovariance()).cwiseAbs().maxCoeff(), 1e-12);
+  for (int64_t id = 0; id < next_id; ++id) {
+    ASSERT_EQ(restored.hasKeyframe(id), original.hasKeyframe(id)) << id;
+    if (!original.hasKeyframe(id)) continue;
+    EXPECT_LT((restored.keyframePose(id).vec() - original.keyframePose(id).vec()).norm(), 1e-9) << id;
+    EXPECT_LT((restored.predictRelative(id).cov - original.predictRelative(id).cov).cwiseAbs().maxCoeff(), 1e-12) << id;
+  }
+}
+
+TEST(PsmSlamFilter, AStateThatIsNotOneIsRefused) {
+  PsmSlamFilter filter;
+  filter.reset(Pose2(), diag3(1e-3, 1e-3, 1e-3));
+  filter.addKeyframe(7);
+  filter.predict(Pose2(1.0, 0.0, 0.1), diag3(1e-3, 1e-3, 1e-3));
+  filter.addKeyframe(9);
+  const PsmSlamFilterState good = filter.exportState();
+  PsmSlamFilter other;
+  other.restore(good);
+
+  PsmSlamFilterState short_mean = good;
+  short_mean.mean.conservativeResize(6);
+  EXPECT_THROW(other.restore(short_mean), std::invalid_argument);
+  PsmSlamFilterState twice = good;
+  twice.ids = {7, 7};
+  EXPECT_THROW(other.restore(twice), std::invalid_argument);
+  PsmSlamFilterState no_active = good;
+  no_active.active = 8;
+  EXPECT_THROW(other.restore(no_active), std::invalid_argument);
+  PsmSlamFilterState not_finite = good;
+  not_finite.cov(4, 2) = std::nan("");
+  EXPECT_THROW(other.restore(not_finite), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace polarslam
