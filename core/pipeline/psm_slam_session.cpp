@@ -163,8 +163,8 @@ void PsmSlamSession::writeSnapshot(const std::string& dir, nlohmann::json resume
   if (!m) throw MapFormatError(dir, "no map yet: nothing to snapshot");
   resume["mode"] = "continue";
   const PsmSlam& slam = m->slam();
-  // The map's poses are taken as known when resuming: the robot's uncertainty relative to its
-  // reference scan is what it keeps.
+  // For readers of resume.json: the robot's uncertainty relative to its reference scan. The
+  // resumed filter itself is resume-filter.bin.
   const Mat3 cov = slam.uncertaintyFromRobot(slam.filter().activeKeyframe());
   resume["pose"] = poseJson(slam.currentPose());
   const PsmSlamFilterSeed seed = slam.filterSeed();
@@ -178,6 +178,38 @@ void PsmSlamSession::writeSnapshot(const std::string& dir, nlohmann::json resume
   map.resume_filter = filterStateBytes(seed.filter);
   saveMap(dir, map, nullptr);
 }
+
+namespace {
+
+/// A snapshot written before resume-filter.bin held, per reference scan in the filter, only its
+/// covariance as seen from the robot: resumed as that, uncorrelated, at the map's poses, every one
+/// kept for loop closure (what those versions did), so that an upgrade loses no run.
+PsmSlamFilterSeed olderFilterSeed(const nlohmann::json& filter, const SavedMapOptions& options, const PoseGraph& graph,
+                                  const std::string& file) {
+  if (!options.initial_pose) throw MapFormatError(file, "'" + file + "': a mapping snapshot without a pose");
+  const nlohmann::json& keyframes = filter.at("keyframes");
+  PsmSlamFilterSeed seed;
+  seed.filter.active = filter.at("active").get<int64_t>();
+  const Eigen::Index n = static_cast<Eigen::Index>(3 * (keyframes.size() + 1));
+  seed.filter.mean.resize(n);
+  seed.filter.cov = Eigen::MatrixXd::Zero(n, n);
+  seed.filter.mean.head<3>() = options.initial_pose->vec();
+  seed.filter.cov.topLeftCorner<3, 3>() = options.initial_cov;
+  Eigen::Index row = 3;
+  for (const nlohmann::json& k : keyframes) {
+    const int64_t id = k.at("id").get<int64_t>();
+    if (graph.indexOf(id) < 0)
+      throw MapFormatError(file, "'" + file + "': filter keyframe " + std::to_string(id) + " is not a graph node");
+    seed.filter.ids.push_back(id);
+    seed.skeleton.push_back(id);
+    seed.filter.mean.segment<3>(row) = graph.node(id).pose.vec();
+    seed.filter.cov.block<3, 3>(row, row) = covarianceFromJson(k.at("covariance"), file);
+    row += 3;
+  }
+  return seed;
+}
+
+}  // namespace
 
 std::optional<SessionSnapshot> readSessionSnapshot(const std::string& dir, const SavedMapOptions& options) {
   if (!std::filesystem::exists(dir)) return std::nullopt;
@@ -198,14 +230,18 @@ std::optional<SessionSnapshot> readSessionSnapshot(const std::string& dir, const
     if (snapshot.options.mode == "continue") {
       snapshot.options.save_map = options.save_map;
       const nlohmann::json& filter = snapshot.resume.at("filter");
-      if (filter.value("state", "") != kResumeFilterLayout)
-        throw MapFormatError(file, "'" + file + "' was written by an older polarslam: its filter cannot be resumed");
-      PsmSlamFilterSeed seed;
-      seed.filter.active = filter.at("active").get<int64_t>();
-      seed.filter.ids = filter.at("keyframes").get<std::vector<int64_t>>();
-      seed.skeleton = filter.at("skeleton").get<std::vector<int64_t>>();
-      readFilterStateBytes(map.resume_filter, dir + "/resume-filter.bin", seed.filter);
-      snapshot.options.filter_seed = seed;
+      if (!filter.contains("state")) {
+        snapshot.options.filter_seed = olderFilterSeed(filter, snapshot.options, map.graph, file);
+      } else {
+        if (filter.at("state").get<std::string>() != kResumeFilterLayout)
+          throw MapFormatError(file, "'" + file + "': unknown filter layout " + filter.at("state").dump());
+        PsmSlamFilterSeed seed;
+        seed.filter.active = filter.at("active").get<int64_t>();
+        seed.filter.ids = filter.at("keyframes").get<std::vector<int64_t>>();
+        seed.skeleton = filter.at("skeleton").get<std::vector<int64_t>>();
+        readFilterStateBytes(map.resume_filter, dir + "/resume-filter.bin", seed.filter);
+        snapshot.options.filter_seed = seed;
+      }
     }
     if (snapshot.resume.contains("last_odometry")) {
       const nlohmann::json& o = snapshot.resume["last_odometry"];

@@ -12,8 +12,9 @@
 
 #include <chrono>
 #include <filesystem>
-#include <optional>
 #include <iostream>
+#include <memory>
+#include <optional>
 
 #include "common/program_info.hpp"
 #include "pipeline/pipelines.hpp"
@@ -62,15 +63,18 @@ class GraphPublisher {
   int64_t seq_ = 0;
 };
 
+/// Moves a snapshot that cannot be resumed out of the way, keeping it for a person to look at.
+void setSnapshotAside(const std::string& dir, const std::string& why, const std::string& suffix) {
+  std::error_code ec;
+  std::filesystem::remove_all(dir + suffix, ec);
+  std::filesystem::rename(dir, dir + suffix, ec);
+  std::cerr << "polarslam-psm-slam: warning: snapshot " << dir << " " << why << "; kept as " << dir + suffix << "\n";
+}
+
 /// The crash-recovery snapshot to resume from, if `dir` holds one of this launch; a damaged or
 /// stale one is moved aside with a warning and the process starts from its journal alone.
 std::optional<SessionSnapshot> restorableSnapshot(const std::string& dir, const SavedMapOptions& options) {
-  auto setAside = [&](const std::string& why, const std::string& suffix) {
-    std::error_code ec;
-    std::filesystem::remove_all(dir + suffix, ec);
-    std::filesystem::rename(dir, dir + suffix, ec);
-    std::cerr << "polarslam-psm-slam: warning: snapshot " << dir << " " << why << "; kept as " << dir + suffix << "\n";
-  };
+  auto setAside = [&](const std::string& why, const std::string& suffix) { setSnapshotAside(dir, why, suffix); };
   try {
     std::optional<SessionSnapshot> snapshot = readSessionSnapshot(dir, options);
     if (snapshot && snapshot->resume.value("launch", std::string()) != InputJournal::currentLaunchId()) {
@@ -83,6 +87,21 @@ std::optional<SessionSnapshot> restorableSnapshot(const std::string& dir, const 
     setAside(std::string("is damaged (") + e.what() + ")", ".damaged");
     return std::nullopt;
   }
+}
+
+/// The session, resumed from `snapshot` where that can be; a snapshot that is readable but names
+/// what its map lacks (a filter of scans it does not hold) is set aside like a damaged one.
+std::unique_ptr<PsmSlamSession> startSession(const PsmSlamEstimatorConfig& config, const SavedMapOptions& options,
+                                             std::optional<SessionSnapshot>& snapshot, const std::string& snapshot_dir) {
+  if (snapshot) {
+    try {
+      return std::make_unique<PsmSlamSession>(config, snapshot->options);
+    } catch (const std::invalid_argument& e) {
+      setSnapshotAside(snapshot_dir, std::string("cannot be resumed (") + e.what() + ")", ".damaged");
+      snapshot.reset();
+    }
+  }
+  return std::make_unique<PsmSlamSession>(config, options);
 }
 
 /// One line of what the run did, from its report figures.
@@ -149,9 +168,10 @@ int main(int argc, char** argv) {
     const SavedMapOptions map_options = saved_map.resolve(save_map);
     const bool snapshots = !journal.path.empty() && snapshot_period > 0.0;
     const std::string snapshot_dir = journal.path + ".snapshot";
-    const std::optional<SessionSnapshot> snapshot =
-        snapshots ? restorableSnapshot(snapshot_dir, map_options) : std::nullopt;
-    PsmSlamSession session(loadPsmSlamEstimatorConfig(config), snapshot ? snapshot->options : map_options);
+    std::optional<SessionSnapshot> snapshot = snapshots ? restorableSnapshot(snapshot_dir, map_options) : std::nullopt;
+    const std::unique_ptr<PsmSlamSession> session_owner =
+        startSession(loadPsmSlamEstimatorConfig(config), map_options, snapshot, snapshot_dir);
+    PsmSlamSession& session = *session_owner;
     if (snapshot && snapshot->last_odometry) session.onOdometry(*snapshot->last_odometry);
     int64_t last_snapshot_utime = snapshot ? snapshot->resume.value("utime", int64_t{0}) : 0;
     auto save = [&](const char* why) {
