@@ -41,20 +41,30 @@ double worstError(const std::vector<PoseStamped>& poses, const SyntheticRun& run
   return worst;
 }
 
-TEST(PsmSlamSession, ARunResumedFromItsSnapshotGoesOnInTheSameFrame) {
+/// Two laps of the synthetic loop world: the second closes loops with the first.
+SyntheticRun twoLaps() {
   SyntheticRunOptions options;
   options.laps = 2;
-  const SyntheticRun run = testing::simulateLoopRun(testing::makeLoopWorld(), options);
+  return testing::simulateLoopRun(testing::makeLoopWorld(), options);
+}
+
+/// Feeds the scans [from, to) of `run`, each after its odometry, and appends their online poses.
+void feed(PsmSlamSession& session, const SyntheticRun& run, size_t from, size_t to, std::vector<PoseStamped>& poses) {
+  for (size_t k = from; k < to; ++k) {
+    session.onOdometry(run.odometry[k]);
+    poses.push_back(session.onLaser(run.scans[k]).pose);
+  }
+}
+
+TEST(PsmSlamSession, ARunResumedFromItsSnapshotGoesOnInTheSameFrame) {
+  const SyntheticRun run = twoLaps();
   const size_t cut = run.scans.size() / 2;
   const fs::path dir = freshFolder("resume");
   const std::string snapshot_dir = (dir / "psm.journal.snapshot").string();
 
   PsmSlamSession first(syntheticConfig(), {});
   std::vector<PoseStamped> poses;
-  for (size_t k = 0; k < cut; ++k) {
-    first.onOdometry(run.odometry[k]);
-    poses.push_back(first.onLaser(run.scans[k]).pose);
-  }
+  feed(first, run, 0, cut, poses);
   ASSERT_TRUE(first.canSnapshot());
   first.writeSnapshot(snapshot_dir, {{"generation", 3}, {"journal_events", 17}});
 
@@ -69,17 +79,11 @@ TEST(PsmSlamSession, ARunResumedFromItsSnapshotGoesOnInTheSameFrame) {
 
   PsmSlamSession resumed(syntheticConfig(), snapshot->options);
   resumed.onOdometry(*snapshot->last_odometry);
-  for (size_t k = cut; k < run.scans.size(); ++k) {
-    resumed.onOdometry(run.odometry[k]);
-    poses.push_back(resumed.onLaser(run.scans[k]).pose);
-  }
+  feed(resumed, run, cut, run.scans.size(), poses);
   // As good as the same run without the restart (the online poses, before any optimisation).
   PsmSlamSession uninterrupted(syntheticConfig(), {});
   std::vector<PoseStamped> reference;
-  for (size_t k = 0; k < run.scans.size(); ++k) {
-    uninterrupted.onOdometry(run.odometry[k]);
-    reference.push_back(uninterrupted.onLaser(run.scans[k]).pose);
-  }
+  feed(uninterrupted, run, 0, run.scans.size(), reference);
   std::printf("worst online error after the restart: %.3f m resumed, %.3f m uninterrupted\n",
               worstError(poses, run, cut), worstError(reference, run, cut));
   double apart = 0.0;  // between the resumed and the uninterrupted online poses
@@ -102,16 +106,12 @@ TEST(PsmSlamSession, ARunResumedFromItsSnapshotGoesOnInTheSameFrame) {
 // A snapshot written before resume-filter.bin: each reference scan of the filter with its
 // covariance as seen from the robot. An upgraded process still resumes from it.
 TEST(PsmSlamSession, ASnapshotOfTheOlderFormatStillResumes) {
-  SyntheticRunOptions options;
-  options.laps = 2;
-  const SyntheticRun run = testing::simulateLoopRun(testing::makeLoopWorld(), options);
+  const SyntheticRun run = twoLaps();
   const size_t cut = run.scans.size() / 2;
   const fs::path dir = freshFolder("older-snapshot");
   PsmSlamSession first(syntheticConfig(), {});
-  for (size_t k = 0; k < cut; ++k) {
-    first.onOdometry(run.odometry[k]);
-    first.onLaser(run.scans[k]);
-  }
+  std::vector<PoseStamped> poses;
+  feed(first, run, 0, cut, poses);
   const std::string current = (dir / "current").string(), older = (dir / "older").string();
   first.writeSnapshot(current, {});
   StoredMap map = loadMap(current);
@@ -132,11 +132,7 @@ TEST(PsmSlamSession, ASnapshotOfTheOlderFormatStillResumes) {
   EXPECT_EQ(snapshot->options.filter_seed->filter.ids.size(), keyframes.size());
   PsmSlamSession resumed(syntheticConfig(), snapshot->options);
   resumed.onOdometry(*snapshot->last_odometry);
-  std::vector<PoseStamped> poses(cut);
-  for (size_t k = cut; k < run.scans.size(); ++k) {
-    resumed.onOdometry(run.odometry[k]);
-    poses.push_back(resumed.onLaser(run.scans[k]).pose);
-  }
+  feed(resumed, run, cut, run.scans.size(), poses);
   EXPECT_LT(worstError(poses, run, cut), 0.1);
   EXPECT_GT(resumed.finish()["psm_slam"]["loop_closures"].get<int>(), 0);
 
