@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -320,6 +321,15 @@ void PsmSlamFilter::restore(const PsmSlamFilterState& state) {
                                 std::to_string(n) + " values and a " + std::to_string(n) + "² covariance");
   if (!state.mean.allFinite() || !state.cov.allFinite())
     throw std::invalid_argument("the filter state holds a value that is not finite");
+  // Not a full positive-semidefinite test (O(n³) for thousands of keyframes), but what any
+  // covariance satisfies: variances ≥ 0 and correlations within ±1.
+  const Eigen::VectorXd sigma = state.cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+  for (Eigen::Index c = 0; c < n; ++c) {
+    if (!(state.cov(c, c) >= 0.0)) throw std::invalid_argument("the filter state holds a negative variance");
+    for (Eigen::Index r = c + 1; r < n; ++r)
+      if (!(std::abs(state.cov(r, c)) <= sigma(r) * sigma(c) * (1.0 + 1e-9) + 1e-300))
+        throw std::invalid_argument("the filter state's covariance is not one: a correlation beyond ±1");
+  }
   reset(Pose2(Vec3(state.mean.head<3>())), state.cov.topLeftCorner<3, 3>());
   ensureCapacity(state.ids.size() + 1);
   for (const int64_t id : state.ids) {

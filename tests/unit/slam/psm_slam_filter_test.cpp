@@ -401,6 +401,12 @@ TEST(PsmSlamFilter, AStateThatIsNotOneIsRefused) {
   PsmSlamFilterState not_finite = good;
   not_finite.cov(4, 2) = std::nan("");
   EXPECT_THROW(other.restore(not_finite), std::invalid_argument);
+  PsmSlamFilterState negative = good;
+  negative.cov(4, 4) = -1e-6;
+  EXPECT_THROW(other.restore(negative), std::invalid_argument);
+  PsmSlamFilterState overcorrelated = good;
+  overcorrelated.cov(4, 1) = overcorrelated.cov(1, 4) = 1.5 * std::sqrt(good.cov(1, 1) * good.cov(4, 4));
+  EXPECT_THROW(other.restore(overcorrelated), std::invalid_argument);
 }
 
 }  // namespace
