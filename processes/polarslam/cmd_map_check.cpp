@@ -1,6 +1,7 @@
 // polarslam map-check M [--log L]: loads a saved map (docs/maps.md) with every check loadMap
 // makes (versions, sizes, CRC32s, records) and prints what it holds; with --log, also refuses a
-// map made with another laser than the log's first scan. Exit 1 with the offending file named.
+// map made with another laser than the log's first scan; a crash-recovery snapshot is also read
+// back as a restart reads it. Exit 1 with the offending file named.
 #include <chrono>
 #include <iostream>
 #include <optional>
@@ -8,6 +9,8 @@
 #include "command_registry.hpp"
 #include "map/map_store.hpp"
 #include "offline_log.hpp"
+#include "pipeline/psm_slam_session.hpp"
+#include "slam/psm_slam_filter.hpp"
 
 namespace polarslam {
 namespace {
@@ -29,6 +32,28 @@ std::optional<LaserGeometry> firstLaserOf(const MapCheckOptions& o) {
   return laser;
 }
 
+/// What a crash-recovery snapshot (a map with resume.json) would resume: read back as
+/// polarslam-psm-slam reads it, its filter state checked as a restart restores it.
+void describeSnapshot(const std::string& dir) {
+  const std::optional<SessionSnapshot> snapshot = readSessionSnapshot(dir, {});
+  if (!snapshot) return;
+  std::cout << "crash-recovery snapshot: mode " << snapshot->options.mode;
+  if (const auto& seed = snapshot->options.filter_seed) {
+    try {
+      PsmSlamFilter().restore(seed->filter);
+    } catch (const std::invalid_argument& e) {
+      throw MapFormatError(dir + "/resume-filter.bin", "'" + dir + "/resume-filter.bin': " + e.what());
+    }
+    std::cout << ", a filter of " << seed->filter.ids.size() << " reference scans (" << seed->skeleton.size()
+              << " of them kept for loop closure), active " << seed->filter.active;
+  }
+  if (snapshot->options.initial_pose) {
+    const Pose2& p = *snapshot->options.initial_pose;
+    std::cout << ", robot at " << p.x << ", " << p.y << ", " << p.theta;
+  }
+  std::cout << "; resumable\n";
+}
+
 void checkMap(const MapCheckOptions& o) {
   const std::optional<LaserGeometry> laser = firstLaserOf(o);
   const auto start = std::chrono::steady_clock::now();
@@ -39,6 +64,7 @@ void checkMap(const MapCheckOptions& o) {
             << map.graph.countEdges(PoseGraphEdgeKind::Loop) << " active loop closures), " << map.scans.size()
             << " reference scans of " << map.laser.beams << " beams; loaded and checked in " << seconds << " s"
             << (laser ? ", laser matches the log" : "") << "\n";
+  if (!map.resume_json.empty()) describeSnapshot(o.map);
 }
 
 void setupMapCheck(CLI::App& sub) {

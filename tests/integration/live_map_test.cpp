@@ -258,6 +258,14 @@ nlohmann::json killAndResume(const fs::path& dir, const std::string& name, const
   const long journal_events = eventsIn(journal), played = eventsIn(recorded);
   std::printf("%s: killed after %ld recorded messages; the journal holds %ld\n", name.c_str(), played, journal_events);
   EXPECT_LT(journal_events, played / 4) << "the journal was not cut";
+  // What the restart will resume, as map-check reads it.
+  const fs::path check = dir / (name + "-check.out");
+  EXPECT_EQ(runToEnd({binPath("polarslam"), "map-check", journal + ".snapshot"}, check, 60s), 0) << readFile(check);
+  EXPECT_NE(readFile(check).find("crash-recovery snapshot: mode " + std::string(name == "mapping" ? "continue, a filter of"
+                                                                                                     : "localize")),
+            std::string::npos)
+      << readFile(check);
+  EXPECT_NE(readFile(check).find("resumable"), std::string::npos) << readFile(check);
   slam = std::make_unique<ChildProcess>(slam_argv, out2);
   EXPECT_TRUE(player.waitFor(120s));
   std::this_thread::sleep_for(1s);
