@@ -7,6 +7,7 @@
 
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -17,6 +18,9 @@
 #include "child_process.hpp"
 #include "map_files.hpp"
 #include "common/lcm_log.hpp"
+#include "map/map_store.hpp"
+#include "pipeline/psm_slam_session.hpp"
+#include "unit/slam/synthetic_run.hpp"
 #include "polarslam/grid_status_t.hpp"
 #include "polarslam/map_request_t.hpp"
 
@@ -304,6 +308,40 @@ TEST(LiveMap, SnapshotsCutTheJournalAndARestartResumesFromThem) {
   // Localising: the resumed process's final path places the scans since the snapshot.
   EXPECT_LT(figure(localizing, "ate_rmse_m"), 1.10 * figure(offline_localize, "ate_rmse_m"));
   EXPECT_EQ(localizing["recorded"]["final_from"], "the final path published on exit") << localizing.dump();
+  if (!::testing::Test::HasFailure()) fs::remove_all(dir);
+}
+
+// A snapshot that reads back but cannot be resumed (its filter state is not a covariance; the
+// checksum fits, so it is no disk damage) is set aside as damaged, and the process starts from its
+// journal alone instead of failing on every restart.
+TEST(LiveMap, ASnapshotThatCannotBeResumedIsSetAsideAndTheProcessStarts) {
+  const fs::path dir = freshDir("unresumable");
+  const std::string journal = (dir / "psm.journal").string(), snapshot = journal + ".snapshot";
+  const polarslam::testing::SyntheticRun run =
+      polarslam::testing::simulateLoopRun(polarslam::testing::makeLoopWorld(), polarslam::testing::SyntheticRunOptions{});
+  polarslam::PsmSlamSession session({}, {});
+  for (size_t k = 0; k < run.scans.size() / 2; ++k) {
+    session.onOdometry(run.odometry[k]);
+    session.onLaser(run.scans[k]);
+  }
+  session.writeSnapshot(snapshot, {{"generation", 1}});
+  polarslam::StoredMap map = polarslam::loadMap(snapshot);
+  // resume-filter.bin: the mean (3n values), then the covariance's lower triangle by rows; its
+  // element (1, 0) made a correlation far beyond 1.
+  const size_t n = 3 * (nlohmann::json::parse(map.resume_json)["filter"]["keyframes"].size() + 1);
+  const double beyond = 1e6;
+  std::memcpy(map.resume_filter.data() + (n + 1) * sizeof(double), &beyond, sizeof(double));
+  polarslam::saveMap(snapshot, map);
+
+  const std::string out = (dir / "slam.out").string();
+  ChildProcess slam({binPath("polarslam-psm-slam"), "--config", kConfig, "--journal", journal}, out);
+  std::this_thread::sleep_for(3s);
+  slam.signal(SIGINT);
+  ASSERT_TRUE(slam.waitFor(30s));
+  EXPECT_EQ(slam.exitCode(), 0) << readFile(out);
+  EXPECT_NE(readFile(out).find("cannot be resumed"), std::string::npos) << readFile(out);
+  EXPECT_TRUE(fs::exists(snapshot + ".damaged"));
+  EXPECT_FALSE(fs::exists(snapshot + "/resume.json")) << "set aside, not resumed";
   if (!::testing::Test::HasFailure()) fs::remove_all(dir);
 }
 
