@@ -5,6 +5,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <utility>
 #include <cmath>
 #include <stdexcept>
 #include <unordered_map>
@@ -96,6 +97,7 @@ void PsmSlam::restoreFilter(const PsmSlamFilterSeed& seed) {
     skeleton_.insert(id);
   }
   last_scan_pose_ = filter_.robotPose();
+  after_downtime_ = true;
 }
 
 std::vector<std::pair<int64_t, Mat3>> PsmSlam::nodeCovariances() const {
@@ -657,6 +659,7 @@ PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
   // The previous scan's motion says where the robot goes next only over one scan's interval: not
   // after a restart or a stretch of lost scans (seconds in which the robot drove on).
   moving_as_before_ = last_scan_utime_ && scan.utime - *last_scan_utime_ <= kMaxConstantVelocityInterval;
+  after_downtime_ = after_downtime_ || (last_scan_utime_ && !moving_as_before_);
   last_scan_utime_ = scan.utime;
   predictTo(scan.utime);
   std::optional<PreparedScan> prepared = prepareMatchableScan(scan, params_.psm);
@@ -673,7 +676,11 @@ PsmSlamScanResult PsmSlam::addScan(const LaserScan& scan) {
     return result;
   }
   std::optional<Observation> tracked = trackReference(*prepared, scan.laser_pose);
-  if (tracked && goodMatch(*tracked, false)) {
+  // After seconds without scans the robot has moved on, and the match with its reference overlaps
+  // less: it is judged as a loop closure's (a stricter error, a looser overlap) rather than thrown
+  // away for a new reference tied by odometry alone (docs/maps.md, "The downtime").
+  const bool after_downtime = std::exchange(after_downtime_, false);
+  if (tracked && (goodMatch(*tracked, false) || (after_downtime && goodMatch(*tracked, true)))) {
     if (odometry_still_ && robotStill(*tracked)) {
       result.held = true;
       ++stats_.held_scans;

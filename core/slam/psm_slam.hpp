@@ -318,6 +318,9 @@ class PsmSlam {
   /// µs: scans further apart than this do not predict each other's motion (constant velocity).
   static constexpr int64_t kMaxConstantVelocityInterval = 1'000'000;
   bool moving_as_before_ = false;          ///< the last scan was at most that long before this one
+  /// This scan comes after seconds without one (a stretch of lost scans, or the downtime of a run
+  /// resumed from its snapshot): the robot has moved on from its reference scan.
+  bool after_downtime_ = false;
   Pose2 last_scan_pose_;
   Pose2 last_scan_motion_;                 ///< robot motion between the last two scans
   int64_t keyframes_at_last_optimization_ = 0;
