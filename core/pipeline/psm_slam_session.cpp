@@ -213,7 +213,10 @@ PsmSlamFilterSeed olderFilterSeed(const nlohmann::json& filter, const SavedMapOp
 
 std::optional<SessionSnapshot> readSessionSnapshot(const std::string& dir, const SavedMapOptions& options) {
   if (!std::filesystem::exists(dir)) return std::nullopt;
-  const StoredMap map = loadMap(dir);
+  return sessionSnapshotOf(loadMap(dir), dir, options);
+}
+
+SessionSnapshot sessionSnapshotOf(const StoredMap& map, const std::string& dir, const SavedMapOptions& options) {
   const std::string file = dir + "/resume.json";
   if (map.resume_json.empty()) throw MapFormatError(file, "'" + dir + "' is a map, not a snapshot: no resume.json");
   SessionSnapshot snapshot;

@@ -92,5 +92,7 @@ struct SessionSnapshot {
 /// Reads the snapshot in `dir` (nullopt when there is none) for a session that was started with
 /// `options` (its --save-map stays). Throws MapFormatError for a damaged one.
 std::optional<SessionSnapshot> readSessionSnapshot(const std::string& dir, const SavedMapOptions& options);
+/// The same for the map already loaded from `dir` (which must hold a resume.json).
+SessionSnapshot sessionSnapshotOf(const StoredMap& map, const std::string& dir, const SavedMapOptions& options);
 
 }  // namespace polarslam

@@ -74,17 +74,16 @@ void setSnapshotAside(const std::string& dir, const std::string& why, const std:
 /// The crash-recovery snapshot to resume from, if `dir` holds one of this launch; a damaged or
 /// stale one is moved aside with a warning and the process starts from its journal alone.
 std::optional<SessionSnapshot> restorableSnapshot(const std::string& dir, const SavedMapOptions& options) {
-  auto setAside = [&](const std::string& why, const std::string& suffix) { setSnapshotAside(dir, why, suffix); };
   try {
     std::optional<SessionSnapshot> snapshot = readSessionSnapshot(dir, options);
     if (snapshot && snapshot->resume.value("launch", std::string()) != InputJournal::currentLaunchId()) {
-      setAside("belongs to another launch (a reused run folder?)", ".stale");
+      setSnapshotAside(dir, "belongs to another launch (a reused run folder?)", ".stale");
       return std::nullopt;
     }
     if (snapshot) std::cerr << "polarslam-psm-slam: resuming from snapshot " << dir << "\n";
     return snapshot;
   } catch (const MapFormatError& e) {
-    setAside(std::string("is damaged (") + e.what() + ")", ".damaged");
+    setSnapshotAside(dir, std::string("is damaged (") + e.what() + ")", ".damaged");
     return std::nullopt;
   }
 }

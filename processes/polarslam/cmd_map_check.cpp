@@ -34,11 +34,10 @@ std::optional<LaserGeometry> firstLaserOf(const MapCheckOptions& o) {
 
 /// What a crash-recovery snapshot (a map with resume.json) would resume: read back as
 /// polarslam-psm-slam reads it, its filter state checked as a restart restores it.
-void describeSnapshot(const std::string& dir) {
-  const std::optional<SessionSnapshot> snapshot = readSessionSnapshot(dir, {});
-  if (!snapshot) return;
-  std::cout << "crash-recovery snapshot: mode " << snapshot->options.mode;
-  if (const auto& seed = snapshot->options.filter_seed) {
+void describeSnapshot(const StoredMap& map, const std::string& dir) {
+  const SessionSnapshot snapshot = sessionSnapshotOf(map, dir, {});
+  std::cout << "crash-recovery snapshot: mode " << snapshot.options.mode;
+  if (const auto& seed = snapshot.options.filter_seed) {
     try {
       PsmSlamFilter().restore(seed->filter);
     } catch (const std::invalid_argument& e) {
@@ -47,8 +46,8 @@ void describeSnapshot(const std::string& dir) {
     std::cout << ", a filter of " << seed->filter.ids.size() << " reference scans (" << seed->skeleton.size()
               << " of them kept for loop closure), active " << seed->filter.active;
   }
-  if (snapshot->options.initial_pose) {
-    const Pose2& p = *snapshot->options.initial_pose;
+  if (snapshot.options.initial_pose) {
+    const Pose2& p = *snapshot.options.initial_pose;
     std::cout << ", robot at " << p.x << ", " << p.y << ", " << p.theta;
   }
   std::cout << "; resumable\n";
@@ -64,7 +63,7 @@ void checkMap(const MapCheckOptions& o) {
             << map.graph.countEdges(PoseGraphEdgeKind::Loop) << " active loop closures), " << map.scans.size()
             << " reference scans of " << map.laser.beams << " beams; loaded and checked in " << seconds << " s"
             << (laser ? ", laser matches the log" : "") << "\n";
-  if (!map.resume_json.empty()) describeSnapshot(o.map);
+  if (!map.resume_json.empty()) describeSnapshot(map, o.map);
 }
 
 void setupMapCheck(CLI::App& sub) {

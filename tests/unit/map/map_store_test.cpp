@@ -85,6 +85,13 @@ class MapStore : public ::testing::Test {
   void rewrite(const std::string& name, const std::string& content) const {
     std::ofstream(dir_ + "/" + name, std::ios::binary | std::ios::trunc) << content;
   }
+  /// Rewrites `name` and makes the manifest's size and CRC32 of it fit: the parsers see the content.
+  void rewriteFitting(const std::string& name, const std::string& content, const std::string& manifest) const {
+    rewrite(name, content);
+    nlohmann::json fitted = nlohmann::json::parse(manifest);
+    fitted["files"][name] = {{"bytes", content.size()}, {"crc32", mapCrc32(content)}};
+    rewrite("manifest.json", fitted.dump(1));
+  }
 
   fs::path root_;
   std::string dir_;
@@ -264,15 +271,7 @@ TEST_F(MapStore, RefusesAWellChecksummedButMalformedRecordNamingTheLine) {
   saveMap(dir_, map);
   const std::string original = readTextFile(dir_ + "/graph.txt");
   const std::string graph = original + "edge 0 7 1 1 0 0 0 1 0 0 0 1 0 0 0 1\n";  // node 7 does not exist
-  rewrite("graph.txt", graph);
-  std::string manifest = readTextFile(dir_ + "/manifest.json");
-  const std::string old_entry_bytes = "\"bytes\": " + std::to_string(original.size());
-  const size_t at = manifest.find(old_entry_bytes);
-  ASSERT_NE(at, std::string::npos);
-  manifest.replace(at, old_entry_bytes.size(), "\"bytes\": " + std::to_string(graph.size()));
-  const std::string old_crc = std::to_string(mapCrc32(original));
-  manifest.replace(manifest.find(old_crc), old_crc.size(), std::to_string(mapCrc32(graph)));
-  rewrite("manifest.json", manifest);
+  rewriteFitting("graph.txt", graph, readTextFile(dir_ + "/manifest.json"));
   const std::string error = loadError();
   EXPECT_NE(error.find("graph.txt:"), std::string::npos) << error;
 }
@@ -329,11 +328,7 @@ TEST_F(MapStore, DamagedFilesThatPassTheChecksumAreRefusedWithAMapFormatError) {
       default: content = content.substr(position()) + content.substr(0, position());  // lines out of place
     }
     for (const std::string& other : names) rewrite(other, other == name ? content : originals[other]);
-    if (name != "manifest.json") {
-      nlohmann::json fitted = nlohmann::json::parse(manifest);
-      fitted["files"][name] = {{"bytes", content.size()}, {"crc32", mapCrc32(content)}};
-      rewrite("manifest.json", fitted.dump(1));
-    }
+    if (name != "manifest.json") rewriteFitting(name, content, manifest);
     try {
       loadMap(dir_);
       ++loaded;
