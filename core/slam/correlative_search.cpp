@@ -371,7 +371,7 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
     if (within_a_place(node, group)) continue;
     if (node.level == 0 && group.level == 0) {
       result.places.push_back({poseOf(group.first, headings, node.x, node.y), score_of(node.sum)});
-      if (result.places.size() == 1 && query.want_rivals && !query.want_rivals(result.places.front())) break;
+      if (query.go_on && !query.go_on(result.places)) break;
       threshold = std::max(query.min_score, result.places.front().score - query.rival_margin);
       max_deficit = allowed_deficit(threshold);
       if (setting_aside) {

@@ -53,8 +53,10 @@ struct CorrelativeQuery {
   /// of the best, only once one does. A search that finds nothing costs what a search from this
   /// score does; one that finds a place costs about what a search from the rivals' score does.
   double best_at_least = 0.0;
-  /// Asked once the best place is found: false ends the search with it alone (no rivals wanted).
-  std::function<bool(const CorrelativeHit& best)> want_rivals;
+  /// Asked after each place is found, with the places so far (best first: the first time, the
+  /// best alone): false ends the search with them (no rivals wanted, or the caller's verdict can no
+  /// longer change). Places come in order of score, none better than one before it.
+  std::function<bool(const std::vector<CorrelativeHit>& places)> go_on;
 };
 
 struct CorrelativeSearchResult {

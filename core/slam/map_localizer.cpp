@@ -302,40 +302,36 @@ CorrelativeQuery MapLocalizer::globalQuery() const {
           .rival_distance = options_.global_ambiguity_distance,
           .rival_heading = params_.loop_ambiguity_heading,
           .best_at_least = 0.0,
-          .want_rivals = {}};
+          .go_on = {}};
 }
 
 std::optional<MapLocalizer::Fix> MapLocalizer::searchGlobally(const LaserScan& raw, const PreparedScan& scan,
                                                               const std::vector<Vec2>& points, const Pose2& current) {
-  const CorrelativeSearchResult found = correlative_->find(points, globalQuery());
-  stats_.global_nodes += found.scored_nodes;
-  return placeAmong(raw, scan, found, current);
-}
-
-std::vector<CorrelativeHit> MapLocalizer::rivalPlaces(const LaserScan& raw, const CorrelativeSearchResult& found,
-                                                      const Pose2& current) {
-  // The places the scans fit about equally well: a place whose rays would pass through mapped walls
-  // is not where the robot is (a corridor seen the wrong way round, a look-alike). Where the
-  // robot is thought to be now sees through walls too, the map there is not one clean copy (a
-  // map bent by an unclosed loop holds a wall twice): a place seeing through at most half as
-  // much is no less likely on that ground.
+  std::vector<CorrelativeHit> rivals;
   const double see_through_limit = seeThroughLimit(raw, current);
-  // Of the others, one that misfits (1 − score) more than global_misfit_ratio times the best does
-  // is no rival (PSM SLAM's loop ambiguity rule compares error indices the same way).
-  std::vector<CorrelativeHit> places;
-  for (const CorrelativeHit& place : found.places) {
-    if (field_->seeThrough(raw, place.pose, options_.global_see_through_clearance) > see_through_limit)
-      ++stats_.global_see_through;
-    else if (places.empty() || 1.0 - place.score <= options_.global_misfit_ratio * (1.0 - places.front().score))
-      places.push_back(place);
-  }
-  return places;
+  CorrelativeQuery query = globalQuery();
+  // Two rivals make the search ambiguous whatever else it would find: it ends there.
+  query.go_on = [&](const std::vector<CorrelativeHit>& places) {
+    admitRival(raw, places.back(), see_through_limit, rivals);
+    return rivals.size() < 2;
+  };
+  stats_.global_nodes += correlative_->find(points, query).scored_nodes;
+  ++stats_.global_searches;
+  return fixAmong(raw, scan, rivals);
 }
 
-std::optional<MapLocalizer::Fix> MapLocalizer::placeAmong(const LaserScan& raw, const PreparedScan& scan,
-                                                          const CorrelativeSearchResult& found, const Pose2& current) {
-  ++stats_.global_searches;
-  return fixAmong(raw, scan, rivalPlaces(raw, found, current));
+void MapLocalizer::admitRival(const LaserScan& raw, const CorrelativeHit& place, double see_through_limit,
+                              std::vector<CorrelativeHit>& rivals) {
+  // A place whose rays would pass through mapped walls is not where the robot is (a corridor seen
+  // the wrong way round, a look-alike). Where the robot is thought to be now sees through walls
+  // too, the map there is not one clean copy (a map bent by an unclosed loop holds a wall twice):
+  // seeThroughLimit lets a place see through half as much as that. Of the others, one that
+  // misfits (1 − score) more than global_misfit_ratio times the first does is no rival (PSM
+  // SLAM's loop ambiguity rule compares error indices the same way).
+  if (field_->seeThrough(raw, place.pose, options_.global_see_through_clearance) > see_through_limit)
+    ++stats_.global_see_through;
+  else if (rivals.empty() || 1.0 - place.score <= options_.global_misfit_ratio * (1.0 - rivals.front().score))
+    rivals.push_back(place);
 }
 
 std::optional<MapLocalizer::Fix> MapLocalizer::fixAmong(const LaserScan& raw, const PreparedScan& scan,
@@ -387,38 +383,50 @@ bool MapLocalizer::foundElsewhere(const LaserScan& scan, const PreparedScan& pre
   // can tell (the unrefined pose fit less than doubt_max_fit, a pose a few centimetres off fits
   // them), no place elsewhere can be shown to explain them better.
   if (1.0 - tracked_score < options_.global_misfit_ratio * correlative_->gridMisfit()) return false;
+  const auto near_tracked = [&](const Pose2& pose) {
+    return isNear(pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading);
+  };
+  const auto fits_fully = [&](const CorrelativeHit& place) { return field_->fit(scan, place.pose) >= options_.doubt_max_fit; };
+  const auto markedly_better = [&](const CorrelativeHit& place) {
+    return 1.0 - tracked_score > options_.global_misfit_ratio * (1.0 - place.score);
+  };
+  const double see_through_limit = seeThroughLimit(scan, tracked);
   CorrelativeQuery query = globalQuery();
   query.best_at_least = 1.0 - (1.0 - tracked_score) / options_.global_misfit_ratio;
   bool rivals_wanted = false;
-  query.want_rivals = [&](const CorrelativeHit& best) {
-    rivals_wanted =
-        !isNear(best.pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading) ||
-        field_->seeThrough(scan, best.pose, options_.global_see_through_clearance) > seeThroughLimit(scan, tracked);
-    return rivals_wanted;
+  std::vector<CorrelativeHit> rivals;
+  // The search ends as soon as the verdict below is "not elsewhere" whatever else it would find:
+  // a rival where the robot is tracked; or two rivals or more, one of them not fitting fully or
+  // the latest (the worst so far: places come best first) not markedly better than tracked.
+  query.go_on = [&](const std::vector<CorrelativeHit>& places) {
+    if (places.size() == 1) {
+      rivals_wanted = !near_tracked(places.front().pose) ||
+                      field_->seeThrough(scan, places.front().pose, options_.global_see_through_clearance) > see_through_limit;
+      if (!rivals_wanted) return false;
+    }
+    const size_t before = rivals.size();
+    admitRival(scan, places.back(), see_through_limit, rivals);
+    if (rivals.size() == before) return true;
+    const CorrelativeHit& latest = rivals.back();
+    if (near_tracked(latest.pose)) return false;
+    return rivals.size() < 2 || (markedly_better(latest) && std::all_of(rivals.begin(), rivals.end(), fits_fully));
   };
-  const CorrelativeSearchResult found = correlative_->find(points, query);
-  stats_.global_nodes += found.scored_nodes;
+  stats_.global_nodes += correlative_->find(points, query).scored_nodes;
   if (!rivals_wanted) return false;  // no place, or the best is where the robot is tracked
   ++stats_.global_searches;
-  const std::vector<CorrelativeHit> places = rivalPlaces(scan, found, tracked);
-  const auto near_tracked = [&](const CorrelativeHit& place) {
-    return isNear(place.pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading);
-  };
-  if (places.empty() || std::any_of(places.begin(), places.end(), near_tracked)) return false;
+  if (rivals.empty() || std::any_of(rivals.begin(), rivals.end(), [&](const CorrelativeHit& r) { return near_tracked(r.pose); }))
+    return false;
   // Look-alike places, none of them where the robot is tracked, each explaining the scans
   // markedly better and fitting the scan as a tracked pose beyond doubt does: wherever the robot
   // is, it is not there (a kidnapping in a symmetric building); which of them it is, is for the
   // searches while lost to settle. Places fitting less are no such evidence (on ground the map
   // does not hold, a repetitive building offers many that fit most of a scan).
-  if (places.size() > 1) {
+  if (rivals.size() > 1) {
     ++stats_.global_ambiguous;
-    const auto fits_fully = [&](const CorrelativeHit& place) { return field_->fit(scan, place.pose) >= options_.doubt_max_fit; };
-    return std::all_of(places.begin(), places.end(), fits_fully) &&
-           1.0 - tracked_score > options_.global_misfit_ratio * (1.0 - places.back().score);
+    return std::all_of(rivals.begin(), rivals.end(), fits_fully) && markedly_better(rivals.back());
   }
-  const std::optional<Fix> place = fixAmong(scan, prepared, places);
-  if (!place || isNear(place->pose, tracked, options_.global_ambiguity_distance, params_.loop_ambiguity_heading))
-    return false;
+  const std::optional<Fix> place = fixAmong(scan, prepared, rivals);
+  if (!place || near_tracked(place->pose)) return false;
   return 1.0 - tracked_score > options_.global_misfit_ratio * (1.0 - place->score);
 }
 

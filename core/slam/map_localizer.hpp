@@ -193,12 +193,11 @@ class MapLocalizer {
                                     const Pose2& current);
   /// The global search's query: places from global_min_score, rivals within global_score_margin.
   CorrelativeQuery globalQuery() const;
-  /// The unambiguous best of the places a search `found`, refined and checked, if any.
-  std::optional<Fix> placeAmong(const LaserScan& raw, const PreparedScan& scan, const CorrelativeSearchResult& found,
-                                const Pose2& current);
-  /// The places a search `found` that could be where the robot is: seeing through no more mapped
-  /// walls than `current` allows, and misfitting at most global_misfit_ratio times the best.
-  std::vector<CorrelativeHit> rivalPlaces(const LaserScan& raw, const CorrelativeSearchResult& found, const Pose2& current);
+  /// Adds a place a search found (they come best first) to `rivals` if it could be where the robot
+  /// is: it sends at most `see_through_limit` of `raw`'s rays through mapped walls, and misfits at
+  /// most global_misfit_ratio times the first of them.
+  void admitRival(const LaserScan& raw, const CorrelativeHit& place, double see_through_limit,
+                  std::vector<CorrelativeHit>& rivals);
   /// The one of `places` refined and checked, if there is exactly one and it holds.
   std::optional<Fix> fixAmong(const LaserScan& raw, const PreparedScan& scan, const std::vector<CorrelativeHit>& places);
   /// The fraction of `raw`'s rays a place may send through mapped walls: global_max_see_through, or

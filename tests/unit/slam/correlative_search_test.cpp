@@ -73,7 +73,7 @@ TEST(CorrelativeMapSearch, FindsTheSamePoseAsScoringEveryPose) {
   const Pose2 truth(3.03, 1.12, 0.4);
   std::vector<Vec2> points;
   for (size_t i = 0; i < map.size(); i += 3) points.push_back(truth.inverseTransform(map[i]));
-  const CorrelativeQuery query{.min_score = 0.3, .rival_margin = 0.0, .rival_distance = 0.5, .rival_heading = 0.5, .best_at_least = 0.0, .want_rivals = {}};
+  const CorrelativeQuery query{.min_score = 0.3, .rival_margin = 0.0, .rival_distance = 0.5, .rival_heading = 0.5, .best_at_least = 0.0, .go_on = {}};
   const CorrelativeSearchResult found = search.find(points, query);
   ASSERT_FALSE(found.places.empty());
 
@@ -161,7 +161,7 @@ TEST(CorrelativeMapSearch, ReportsEveryPlaceWithinTheMarginAsScoringEveryPoseDoe
   const Pose2 truth(2.4, 1.6, 0.2);
   std::vector<Vec2> points;
   for (size_t i = 0; i < map.size(); i += 4) points.push_back(truth.inverseTransform(map[i]));
-  const CorrelativeQuery query{.min_score = 0.3, .rival_margin = 0.15, .rival_distance = 0.4, .rival_heading = 0.4, .best_at_least = 0.0, .want_rivals = {}};
+  const CorrelativeQuery query{.min_score = 0.3, .rival_margin = 0.15, .rival_distance = 0.4, .rival_heading = 0.4, .best_at_least = 0.0, .go_on = {}};
   const CorrelativeSearchResult found = search.find(points, query);
   ASSERT_FALSE(found.places.empty());
   const double floor = found.places.front().score - query.rival_margin;
@@ -194,7 +194,7 @@ TEST(CorrelativeMapSearch, ABestPlaceThresholdFindsTheSamePlacesOrNone) {
   const Pose2 truth(2.4, 1.6, 0.2);
   std::vector<Vec2> points;
   for (size_t i = 0; i < map.size(); i += 4) points.push_back(truth.inverseTransform(map[i]));
-  CorrelativeQuery query{.min_score = 0.3, .rival_margin = 0.15, .rival_distance = 0.4, .rival_heading = 0.4, .best_at_least = 0.0, .want_rivals = {}};
+  CorrelativeQuery query{.min_score = 0.3, .rival_margin = 0.15, .rival_distance = 0.4, .rival_heading = 0.4, .best_at_least = 0.0, .go_on = {}};
   const CorrelativeSearchResult all = search.find(points, query);
   ASSERT_GE(all.places.size(), 2u);
   const double best = all.places.front().score;
@@ -209,11 +209,18 @@ TEST(CorrelativeMapSearch, ABestPlaceThresholdFindsTheSamePlacesOrNone) {
   query.best_at_least = best + 0.01;
   EXPECT_TRUE(search.find(points, query).places.empty()) << "no pose scores more than the best";
   query.best_at_least = 0.0;
-  query.want_rivals = [](const CorrelativeHit&) { return false; };
+  query.go_on = [](const std::vector<CorrelativeHit>&) { return false; };
   const CorrelativeSearchResult alone = search.find(points, query);
   ASSERT_EQ(alone.places.size(), 1u);
   EXPECT_NEAR(alone.places.front().score, best, 1e-12);
   EXPECT_LT(alone.scored_nodes, all.scored_nodes);
+  // Places come best first, and a search told to stop at the second has the first two of all's.
+  for (size_t i = 1; i < all.places.size(); ++i) EXPECT_LE(all.places[i].score, all.places[i - 1].score);
+  query.go_on = [](const std::vector<CorrelativeHit>& places) { return places.size() < 2; };
+  const CorrelativeSearchResult two = search.find(points, query);
+  ASSERT_EQ(two.places.size(), 2u);
+  EXPECT_NEAR(two.places[1].score, all.places[1].score, 1e-12);
+  EXPECT_LE(two.scored_nodes, all.scored_nodes);
 }
 
 TEST(CorrelativeMapSearch, NothingToSearchFindsNothing) {
