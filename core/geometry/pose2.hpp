@@ -69,10 +69,10 @@ inline double distanceToSegment(const Vec2& p, const Vec2& a, const Vec2& b, dou
 /// Relative pose of b seen from a: (⊖a) ⊕ b.
 inline Pose2 between(const Pose2& a, const Pose2& b) { return a.inverse() * b; }
 
-/// Whether `b` lies within `translation` and `rotation` of `a` (in a's frame).
+/// Whether `b` lies within `translation` and `rotation` of `a`: between(a, b) without its sine and
+/// cosine (a rotation keeps lengths; it is called in loops over every node of a map).
 inline bool isNear(const Pose2& a, const Pose2& b, double translation, double rotation) {
-  const Pose2 apart = between(a, b);
-  return apart.translation().norm() <= translation && std::abs(apart.theta) <= rotation;
+  return std::hypot(b.x - a.x, b.y - a.y) <= translation && std::abs(wrapAngle(b.theta - a.theta)) <= rotation;
 }
 
 /// Jacobians of c = a ⊕ b with respect to a and b.

@@ -89,18 +89,21 @@ SolveResult solveOnce(PoseGraph& graph, const PoseGraphOptimizerOptions& options
     parameters[3 * i + 1] = nodes[i].pose.y;
     parameters[3 * i + 2] = nodes[i].pose.theta;
   }
+  const std::vector<size_t> roots = componentRoots(graph);
+  std::vector<bool> fixed(nodes.size());
+  for (size_t i = 0; i < nodes.size(); ++i) fixed[i] = roots[i] == i || nodes[i].id < options.fixed_below;
   ceres::Problem problem;
   for (const auto& e : graph.edges()) {
-    if (!e.active) continue;
+    const size_t from = static_cast<size_t>(graph.indexOf(e.from)), to = static_cast<size_t>(graph.indexOf(e.to));
+    // An edge between two fixed nodes moves nothing (a map held fixed while localising in it has
+    // hundreds): Ceres would set it aside too, after building it.
+    if (!e.active || (fixed[from] && fixed[to])) continue;
     ceres::LossFunction* loss =
         disownable(e.kind) && options.loop_loss_scale > 0 ? new ceres::CauchyLoss(options.loop_loss_scale) : nullptr;
-    problem.AddResidualBlock(RelativePoseCost::create(e), loss, &parameters[3 * graph.indexOf(e.from)],
-                             &parameters[3 * graph.indexOf(e.to)]);
+    problem.AddResidualBlock(RelativePoseCost::create(e), loss, &parameters[3 * from], &parameters[3 * to]);
   }
-  const std::vector<size_t> roots = componentRoots(graph);
   for (size_t i = 0; i < nodes.size(); ++i)
-    if ((roots[i] == i || nodes[i].id < options.fixed_below) && problem.HasParameterBlock(&parameters[3 * i]))
-      problem.SetParameterBlockConstant(&parameters[3 * i]);
+    if (fixed[i] && problem.HasParameterBlock(&parameters[3 * i])) problem.SetParameterBlockConstant(&parameters[3 * i]);
 
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;

@@ -106,7 +106,7 @@ struct PoseGraphOptimizationSummary {
   bool solved = false;        ///< Ceres reported a usable solution
   int iterations = 0;
   int rounds = 0;             ///< solves (1 + outlier-rejection rounds)
-  double initial_cost = 0.0;  ///< ½Σ whitened residuals² (with the robust loss) before
+  double initial_cost = 0.0;  ///< ½Σ whitened residuals² (with the robust loss) before, of the edges it can move
   double final_cost = 0.0;    ///< ... and after
   double seconds = 0.0;       ///< wall time spent in this call
   size_t nodes = 0, edges = 0;
