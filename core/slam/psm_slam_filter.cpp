@@ -291,26 +291,53 @@ void PsmSlamFilter::setKeyframePoses(const std::unordered_map<int64_t, Pose2>& p
 }
 
 PsmSlamFilterState PsmSlamFilter::exportState() const {
-  PsmSlamFilter flushed = *this;
-  flushed.flush();
+  // What flush() would make of the exported blocks, computed for them alone: a copy of the filter
+  // to flush would take its storage, sized by capacity (up to twice the slots in use, hundreds of
+  // megabytes near max_filter_keyframes), on top of the state's own.
   PsmSlamFilterState state;
   state.active = active_id_;
   std::vector<std::pair<int64_t, size_t>> keyframes(slot_of_.begin(), slot_of_.end());
   std::sort(keyframes.begin(), keyframes.end());
   std::vector<Eigen::Index> from{0};  // state offset of each exported pose in the slots
+  size_t active = 0;                  // the active keyframe's index among them (0: none)
   for (const auto& [id, slot] : keyframes) {
     state.ids.push_back(id);
+    if (slot == active_slot_) active = from.size();
     from.push_back(offset(slot));
   }
-  const Eigen::Index n = static_cast<Eigen::Index>(3 * from.size());
+  const size_t m = from.size();
+  const Eigen::Index n = static_cast<Eigen::Index>(3 * m);
+  const auto at = [](size_t i) { return static_cast<Eigen::Index>(3 * i); };
   state.mean.resize(n);
   state.cov.resize(n, n);
-  for (size_t i = 0; i < from.size(); ++i) {
-    const Eigen::Index row = static_cast<Eigen::Index>(3 * i);
-    state.mean.segment<3>(row) = flushed.x_.segment<3>(from[i]);
-    for (size_t j = 0; j < from.size(); ++j)
-      state.cov.block<3, 3>(row, static_cast<Eigen::Index>(3 * j)) = flushed.block(from[i], from[j]);
+  for (size_t i = 0; i < m; ++i) {
+    state.mean.segment<3>(at(i)) = x_.segment<3>(from[i]);
+    for (size_t j = 0; j <= i; ++j) state.cov.block<3, 3>(at(i), at(j)) = block(from[i], from[j]);
   }
+  if (pending_ && active != 0) {
+    // flush(): with W = P(:, [robot, active]), P −= W Ψ Wᵀ and x += W θ, then P(:, [robot, active]) = W Φᵀ.
+    const Eigen::Index a = offset(active_slot_);
+    Eigen::MatrixXd W(n, 6);
+    for (size_t i = 0; i < m; ++i) W.block<3, 6>(at(i), 0) << block(from[i], 0), block(from[i], a);
+    state.mean.noalias() += W * theta_;
+    const Eigen::MatrixXd W_psi = W * psi_;
+    state.cov.triangularView<Eigen::Lower>() -= W_psi * W.transpose();
+    const Eigen::MatrixXd cross = W * phi_.transpose();
+    for (size_t i = 0; i < m; ++i)
+      for (const auto& [column, part] : {std::pair{size_t{0}, 0}, {active, 3}}) {
+        const Mat3 value = cross.block<3, 3>(at(i), part);
+        if (i >= column) state.cov.block<3, 3>(at(i), at(column)) = value;
+        else state.cov.block<3, 3>(at(column), at(i)) = value.transpose();
+      }
+  }
+  state.mean.head<3>() = local_x_.head<3>();
+  state.cov.topLeftCorner<3, 3>() = local_P_.topLeftCorner<3, 3>();
+  if (active != 0) {
+    state.mean.segment<3>(at(active)) = local_x_.tail<3>();
+    state.cov.block<3, 3>(at(active), 0) = local_P_.block<3, 3>(3, 0);
+    state.cov.block<3, 3>(at(active), at(active)) = local_P_.block<3, 3>(3, 3);
+  }
+  for (Eigen::Index c = 0; c + 1 < n; ++c) state.cov.row(c).tail(n - c - 1) = state.cov.col(c).tail(n - c - 1).transpose();
   return state;
 }
 

@@ -353,7 +353,8 @@ TEST(PsmSlamFilter, ARestoredStateGoesOnAsTheFilterItCameFrom) {
       ++removed;
     }
   original.predict(Pose2(0.3, 0.0, 0.05), diag3(4e-4, 1e-4, 3e-4));
-  original.update(original.activeKeyframe(), original.predictRelative(original.activeKeyframe()).mean,
+  // An innovation, so that the pending update moves the other keyframes too.
+  original.update(original.activeKeyframe(), original.predictRelative(original.activeKeyframe()).mean * Pose2(0.02, -0.01, 0.004),
                   diag3(1e-3, 2e-3, 2e-4), 1e9);
   const size_t flushes = original.flushCount();
   const PsmSlamFilterState state = original.exportState();
