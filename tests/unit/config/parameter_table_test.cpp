@@ -1,12 +1,9 @@
 // ParameterTable: one description of a component's keys reads YAML (ranges, degrees, unknown keys
 // rejected with file and line), prints the effective values, and finds keys a file leaves out.
-#include <unistd.h>
-
 #include <gtest/gtest.h>
 
-#include <fstream>
-
 #include "config/parameter_table.hpp"
+#include "scratch_files.hpp"
 
 namespace polarslam {
 namespace {
@@ -31,16 +28,11 @@ void describe(ParameterTable& t, Params& p) {
   t.section("inner", "a nested map").number("value", p.inner, 0.0, 5.0, "inside");
 }
 
-// One file per test process: ctest runs the tests of this file in parallel.
-std::string temporaryPath(const std::string& name) {
-  return ::testing::TempDir() + "/" + std::to_string(::getpid()) + "-" + name;
-}
+testing::ScratchFiles scratch;  // removed as the test process ends
 
-std::string writeFile(const std::string& name, const std::string& text) {
-  const std::string path = temporaryPath(name);
-  std::ofstream(path) << text;
-  return path;
-}
+std::string temporaryPath(const std::string& name) { return scratch.path(name); }
+
+std::string writeFile(const std::string& name, const std::string& text) { return scratch.write(name, text); }
 
 Params readParams(const std::string& text) {
   const YamlFields yaml(writeFile("parameters.yaml", text));

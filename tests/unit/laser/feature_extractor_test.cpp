@@ -1,13 +1,11 @@
 // Segmentation and the LaserFeatureExtractor on analytic scans: rooms, corners, breaks, hints,
 // bad readings, any beam count and field of view.
-#include <unistd.h>
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <numbers>
 #include <random>
@@ -15,6 +13,7 @@
 #include <vector>
 
 #include "laser/laser_feature_extractor.hpp"
+#include "scratch_files.hpp"
 #include "unit/laser/synthetic_scans.hpp"
 
 namespace polarslam {
@@ -118,7 +117,7 @@ TEST(FeatureExtractor, WorksForAnyBeamCountAndFieldOfView) {
   };
   for (const Layout& layout : {Layout{180, 181}, Layout{180, 361}, Layout{240, 682}, Layout{270, 1081},
                                Layout{100, 50}, Layout{360, 10}, Layout{30, 16}}) {
-    SCOPED_TRACE(testing::Message() << layout.fov_deg << " deg, " << layout.beams << " beams");
+    SCOPED_TRACE(::testing::Message() << layout.fov_deg << " deg, " << layout.beams << " beams");
     const double fov = deg2rad(layout.fov_deg);
     const LaserScan scan = synthetic::scanOfWalls(walls, -fov / 2, fov / (layout.beams - 1), layout.beams);
     const FeatureSet f = LaserFeatureExtractor().extract(scan);
@@ -311,19 +310,14 @@ TEST(FeatureExtractor, SegmentationReportsCornerCandidatesOnlyForPerpendicularNe
   EXPECT_TRUE(f.corners.empty());
 }
 
-std::string writeTemporary(const std::string& name, const std::string& text) {
-  const std::string path = testing::TempDir() + "/" + std::to_string(::getpid()) + "-" + name;
-  std::ofstream(path) << text;
-  return path;
-}
-
 TEST(LaserFeatureConfig, ReadsTheProjectFeaturesFileAndRejectsTypos) {
   const LaserFeatureConfig c = loadLaserFeatureConfig(POLARSLAM_SOURCE_DIR "/config/laser-features.yaml");
   EXPECT_DOUBLE_EQ(c.errors.range.noise_sigma, 0.01);
   EXPECT_EQ(c.segmentation.min_line_points, 6);
-  const std::string typo = writeTemporary("typo.yaml", "laser_features:\n  segmentation:\n    min_line_pionts: 5\n");
+  polarslam::testing::ScratchFiles scratch;
+  const std::string typo = scratch.write("typo.yaml", "laser_features:\n  segmentation:\n    min_line_pionts: 5\n");
   EXPECT_THROW(loadLaserFeatureConfig(typo), std::runtime_error);
-  const std::string neither = writeTemporary("neither.yaml", "something: 1\n");
+  const std::string neither = scratch.write("neither.yaml", "something: 1\n");
   EXPECT_THROW(loadLaserFeatureConfig(neither), std::runtime_error);
   EXPECT_THROW(loadLaserFeatureConfig(POLARSLAM_SOURCE_DIR "/no/such/file.yaml"), std::runtime_error);
 }
