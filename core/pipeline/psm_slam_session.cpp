@@ -50,6 +50,12 @@ Pose2 parseInitialPose(const std::string& text) {
   return Pose2(v[0], v[1], v[2]);
 }
 
+namespace {
+
+StoredMap mapToLoad(const SavedMapOptions& o) { return o.loaded_map ? *o.loaded_map : loadMap(o.load_map); }
+
+}  // namespace
+
 std::unique_ptr<Estimator> makePsmSlamEstimator(PsmSlamEstimatorConfig config, const SavedMapOptions& o) {
   if (o.load_map.empty()) {
     if (o.initial_pose) throw std::runtime_error("--initial-pose goes with --load-map");
@@ -59,14 +65,14 @@ std::unique_ptr<Estimator> makePsmSlamEstimator(PsmSlamEstimatorConfig config, c
   }
   if (o.mode == "continue") {
     auto estimator =
-        std::make_unique<MapContinuationEstimator>(loadMap(o.load_map), std::move(config), o.initial_pose, o.initial_cov,
+        std::make_unique<MapContinuationEstimator>(mapToLoad(o), std::move(config), o.initial_pose, o.initial_cov,
                                                    o.filter_seed);
     estimator->saveMapTo(o.save_map);
     return estimator;
   }
   if (o.mode != "localize") throw std::runtime_error("--mode must be localize or continue, not '" + o.mode + "'");
   if (!o.save_map.empty()) throw std::runtime_error("--mode localize adds nothing to the map: no --save-map");
-  return std::make_unique<MapLocalizationEstimator>(loadMap(o.load_map), std::move(config), o.initial_pose,
+  return std::make_unique<MapLocalizationEstimator>(mapToLoad(o), std::move(config), o.initial_pose,
                                                     o.initial_cov);
 }
 
@@ -213,7 +219,10 @@ PsmSlamFilterSeed olderFilterSeed(const nlohmann::json& filter, const SavedMapOp
 
 std::optional<SessionSnapshot> readSessionSnapshot(const std::string& dir, const SavedMapOptions& options) {
   if (!std::filesystem::exists(dir)) return std::nullopt;
-  return sessionSnapshotOf(loadMap(dir), dir, options);
+  auto map = std::make_shared<const StoredMap>(loadMap(dir));
+  SessionSnapshot snapshot = sessionSnapshotOf(*map, dir, options);
+  snapshot.options.loaded_map = std::move(map);
+  return snapshot;
 }
 
 SessionSnapshot sessionSnapshotOf(const StoredMap& map, const std::string& dir, const SavedMapOptions& options) {

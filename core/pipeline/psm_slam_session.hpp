@@ -24,6 +24,8 @@ struct SavedMapOptions {
   Mat3 initial_cov = Mat3::Zero();    ///< ... and its covariance
   std::optional<PsmSlamFilterSeed> filter_seed;  ///< continue: resuming a run from its own snapshot
   std::string save_map;               ///< folder the map is saved to (not when localising)
+  /// load_map as already read (a snapshot about to be resumed): it is not read a second time.
+  std::shared_ptr<const StoredMap> loaded_map;
 };
 
 /// "x,y,theta" (m, m, rad); throws std::runtime_error naming --initial-pose otherwise.

@@ -94,7 +94,9 @@ std::unique_ptr<PsmSlamSession> startSession(const PsmSlamEstimatorConfig& confi
                                              std::optional<SessionSnapshot>& snapshot, const std::string& snapshot_dir) {
   if (snapshot) {
     try {
-      return std::make_unique<PsmSlamSession>(config, snapshot->options);
+      auto session = std::make_unique<PsmSlamSession>(config, snapshot->options);
+      snapshot->options.loaded_map.reset();  // the session holds its own copy
+      return session;
     } catch (const std::invalid_argument& e) {
       setSnapshotAside(snapshot_dir, std::string("cannot be resumed (") + e.what() + ")", ".damaged");
       snapshot.reset();
