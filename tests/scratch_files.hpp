@@ -10,7 +10,7 @@
 #include <set>
 #include <string>
 
-namespace polarslam::testing {
+namespace polarslam {
 
 class ScratchFiles {
  public:
@@ -38,4 +38,4 @@ class ScratchFiles {
   std::set<std::string> written_;
 };
 
-}  // namespace polarslam::testing
+}  // namespace polarslam

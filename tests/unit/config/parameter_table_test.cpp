@@ -28,7 +28,7 @@ void describe(ParameterTable& t, Params& p) {
   t.section("inner", "a nested map").number("value", p.inner, 0.0, 5.0, "inside");
 }
 
-testing::ScratchFiles scratch;  // removed as the test process ends
+ScratchFiles scratch;  // removed as the test process ends
 
 std::string temporaryPath(const std::string& name) { return scratch.path(name); }
 

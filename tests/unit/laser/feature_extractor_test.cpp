@@ -314,7 +314,7 @@ TEST(LaserFeatureConfig, ReadsTheProjectFeaturesFileAndRejectsTypos) {
   const LaserFeatureConfig c = loadLaserFeatureConfig(POLARSLAM_SOURCE_DIR "/config/laser-features.yaml");
   EXPECT_DOUBLE_EQ(c.errors.range.noise_sigma, 0.01);
   EXPECT_EQ(c.segmentation.min_line_points, 6);
-  polarslam::testing::ScratchFiles scratch;
+  ScratchFiles scratch;
   const std::string typo = scratch.write("typo.yaml", "laser_features:\n  segmentation:\n    min_line_pionts: 5\n");
   EXPECT_THROW(loadLaserFeatureConfig(typo), std::runtime_error);
   const std::string neither = scratch.write("neither.yaml", "something: 1\n");
