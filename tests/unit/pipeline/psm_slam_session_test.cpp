@@ -78,6 +78,9 @@ TEST(PsmSlamSession, ARunResumedFromItsSnapshotGoesOnInTheSameFrame) {
   EXPECT_EQ(snapshot->last_odometry->utime, run.odometry[cut - 1].utime);
   EXPECT_LT(between(*snapshot->options.initial_pose, first.slam()->currentPose()).translation().norm(), 1e-12);
 
+  // The map read with the snapshot goes on to the session, which does not read the folder again.
+  ASSERT_TRUE(snapshot->options.loaded_map);
+  fs::rename(snapshot_dir, snapshot_dir + ".moved");
   PsmSlamSession resumed(syntheticConfig(), snapshot->options);
   resumed.onOdometry(*snapshot->last_odometry);
   feed(resumed, run, cut, run.scans.size(), poses);
