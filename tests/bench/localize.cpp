@@ -5,7 +5,7 @@
 // full-run SLAM's (goal: ≤ 1.25×, relations across the halves included) and the localisation
 // speed (goal: ≥ 500× real time), with the localiser's counts.
 //
-//   bench_localize [--log X.clf --relations R] [--config psm-slam.yaml]
+//   bench_localize [--log X.clf --relations R] [--config psm-slam.yaml] [--repeat N]
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -35,6 +35,10 @@ int main(int argc, char** argv) {
   bool temporary_mapping = false;
   app.add_flag("--temporary-mapping", temporary_mapping,
                "localise with localization.temporary_mapping (PSM SLAM over the fixed map) whatever the config says");
+  int repeat = 3;
+  app.add_option("--repeat", repeat, "localise this many times and print the fastest run's times (they vary from run to run)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   if (!std::filesystem::exists(log_path)) {
     std::printf("bench_localize: %s is absent; nothing to measure\n", log_path.c_str());
@@ -50,10 +54,26 @@ int main(int argc, char** argv) {
   runOverLog(full_run, log.events);
   const RelationMetric full = evaluateRelations(full_run.trajectory(), relations);
 
+  // The localisation is deterministic, its time on a shared machine is not: the fastest of `repeat`
+  // runs, each checked to end where the first did.
+  const auto fastestOf = [&](const MapThenLocalizeOptions& o, double& slowest) {
+    MapThenLocalizeResult fastest = mapThenLocalize(log.events, split, config, o);
+    slowest = fastest.localize_seconds;
+    for (int i = 1; i < repeat; ++i) {
+      MapThenLocalizeResult again = mapThenLocalize(log.events, split, config, o);
+      if (again.localized.empty() != fastest.localized.empty() ||
+          (!again.localized.empty() && again.localized.back().pose.vec() != fastest.localized.back().pose.vec()))
+        std::printf("warning: localising again ended elsewhere: the localisation is not deterministic\n");
+      slowest = std::max(slowest, again.localize_seconds);
+      if (again.localize_seconds < fastest.localize_seconds) fastest = std::move(again);
+    }
+    return fastest;
+  };
   MapThenLocalizeOptions options;
   options.odometry_moved_by = kOdometryFarAway;
   options.continue_mapping = continue_mapping;
-  const MapThenLocalizeResult result = mapThenLocalize(log.events, split, config, options);
+  double slowest = 0.0;
+  const MapThenLocalizeResult result = fastestOf(options, slowest);
   const RelationMetric joined = evaluateRelations(result.joined, relations);
   const MapLocalizerStats& s = result.stats;
   // The first half's map is not the full run's (it has not seen the second half's loop
@@ -147,14 +167,15 @@ int main(int argc, char** argv) {
   std::printf("%-44s %10.2f %10s\n", "ratio", joined.translation.mean / full.translation.mean, "<= 1.25");
   std::printf("%-44s %9.0fx %10s\n", "localisation speed (real time)", result.localized_duration_s / result.localize_seconds,
               ">= 500x");
-  std::printf("%-44s %10.2f   (doubt searches %.2f, searches while lost %.2f, the rest tracking)\n",
-              "localisation time [s]", result.localize_seconds, s.doubt_seconds, s.search_seconds);
+  std::printf("%-44s %10.2f   (fastest of %d, slowest %.2f; doubt searches %.2f, searches while lost %.2f, the rest tracking)\n",
+              "localisation time [s]", result.localize_seconds, repeat, slowest, s.doubt_seconds, s.search_seconds);
   std::printf("%-44s %10.4f %10.4f  (%zu relations)\n", "second half only: full-run SLAM | localised [m]",
               full_second.translation.mean, localised_second.translation.mean, second_half.size());
   std::printf("%-44s %10.4f %10.4f  (%zu relations)\n", "across the split: full-run SLAM | joined [m]",
               full_across.translation.mean, joined_across.translation.mean, across_split.size());
   options.known_start = true;
-  const MapThenLocalizeResult known = mapThenLocalize(log.events, split, config, options);
+  double known_slowest = 0.0;
+  const MapThenLocalizeResult known = fastestOf(options, known_slowest);
   std::printf("%-44s %10.4f %10.4f\n", "known start: second half | across [m]",
               evaluateRelations(known.localized, second_half).translation.mean,
               evaluateRelations(known.joined, across_split).translation.mean);
@@ -194,8 +215,8 @@ int main(int argc, char** argv) {
   std::printf("%-44s %10.4f %10.4f\n", "known start: first half, full run | joined [m]",
               evaluateRelations(full_run.trajectory(), first_half).translation.mean,
               evaluateRelations(known.joined, first_half).translation.mean);
-  std::printf("known start: %.2f s localising (doubt searches %.2f s)\n", known.localize_seconds,
-              known.stats.doubt_seconds);
+  std::printf("known start: %.2f s localising (fastest of %d, slowest %.2f s; doubt searches %.2f s)\n",
+              known.localize_seconds, repeat, known_slowest, known.stats.doubt_seconds);
   std::printf("known start: %.0fx real time; figures %s\n", known.localized_duration_s / known.localize_seconds,
               known.report["localization"].dump().c_str());
   if (known.report.contains("psm_slam"))
