@@ -395,6 +395,7 @@ bool MapLocalizer::foundElsewhere(const LaserScan& scan, const PreparedScan& pre
   query.best_at_least = 1.0 - (1.0 - tracked_score) / options_.global_misfit_ratio;
   bool rivals_wanted = false;
   std::vector<CorrelativeHit> rivals;
+  bool all_fit = true;  // once there are two rivals: every one of them fits the scan fully
   // The search ends as soon as the verdict below is "not elsewhere" whatever else it would find:
   // a rival where the robot is tracked; or two rivals or more, one of them not fitting fully or
   // the latest (the worst so far: places come best first) not markedly better than tracked.
@@ -409,7 +410,10 @@ bool MapLocalizer::foundElsewhere(const LaserScan& scan, const PreparedScan& pre
     if (rivals.size() == before) return true;
     const CorrelativeHit& latest = rivals.back();
     if (near_tracked(latest.pose)) return false;
-    return rivals.size() < 2 || (markedly_better(latest) && std::all_of(rivals.begin(), rivals.end(), fits_fully));
+    if (rivals.size() < 2) return true;
+    if (rivals.size() == 2) all_fit = fits_fully(rivals.front());
+    all_fit = all_fit && fits_fully(latest);
+    return all_fit && markedly_better(latest);
   };
   stats_.global_nodes += correlative_->find(points, query).scored_nodes;
   if (!rivals_wanted) return false;  // no place, or the best is where the robot is tracked
@@ -423,7 +427,7 @@ bool MapLocalizer::foundElsewhere(const LaserScan& scan, const PreparedScan& pre
   // does not hold, a repetitive building offers many that fit most of a scan).
   if (rivals.size() > 1) {
     ++stats_.global_ambiguous;
-    return std::all_of(rivals.begin(), rivals.end(), fits_fully) && markedly_better(rivals.back());
+    return all_fit && markedly_better(rivals.back());
   }
   const std::optional<Fix> place = fixAmong(scan, prepared, rivals);
   if (!place || near_tracked(place->pose)) return false;
