@@ -5,10 +5,10 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
-#include <utility>
 #include <cmath>
 #include <stdexcept>
 #include <unordered_map>
+#include <utility>
 
 namespace polarslam {
 namespace {

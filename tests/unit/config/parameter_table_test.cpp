@@ -30,12 +30,8 @@ void describe(ParameterTable& t, Params& p) {
 
 ScratchFiles scratch;  // removed as the test process ends
 
-std::string temporaryPath(const std::string& name) { return scratch.path(name); }
-
-std::string writeFile(const std::string& name, const std::string& text) { return scratch.write(name, text); }
-
 Params readParams(const std::string& text) {
-  const YamlFields yaml(writeFile("parameters.yaml", text));
+  const YamlFields yaml(scratch.write("parameters.yaml", text));
   Params p;
   ParameterTable table;
   describe(table, p);
@@ -65,7 +61,7 @@ TEST(ParameterTable, ReadsNumbersDegreesWholeNumbersFlagsWordsAndSections) {
 }
 
 TEST(ParameterTable, BadValuesAreErrorsNamingFileLineAndKey) {
-  const std::string path = temporaryPath("parameters.yaml");
+  const std::string path = scratch.path("parameters.yaml");
   EXPECT_NE(errorOf("distance: 1\ndistanse: 2\n").find(path + ":2: unknown key 'distanse'"), std::string::npos)
       << errorOf("distance: 1\ndistanse: 2\n");
   EXPECT_NE(errorOf("distance: 11\n").find(path + ":1: test.distance: 11 is outside"), std::string::npos);
@@ -82,9 +78,9 @@ TEST(ParameterTable, PrintsWhatItReadsAndFindsKeysAFileLeavesOut) {
   describe(table, p);
   EXPECT_EQ(table.keys(), (std::vector<std::string>{"distance", "angle_deg", "count", "enabled", "mode", "inner.value"}));
   const std::string printed = table.yaml();
-  const YamlFields full(writeFile("printed.yaml", printed));
+  const YamlFields full(scratch.write("printed.yaml", printed));
   EXPECT_TRUE(table.missingFrom(full.root()).empty()) << printed;
-  const YamlFields partial(writeFile("partial.yaml", "distance: 1\ninner: {}\n"));
+  const YamlFields partial(scratch.write("partial.yaml", "distance: 1\ninner: {}\n"));
   EXPECT_EQ(table.missingFrom(partial.root()),
             (std::vector<std::string>{"angle_deg", "count", "enabled", "mode", "inner.value"}));
   p = readParams(printed);
