@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
@@ -12,29 +13,24 @@ namespace {
 
 constexpr float kNoReturn = std::numeric_limits<float>::infinity();
 
+float median3(float a, float b, float c) { return std::max(std::min(a, b), std::min(std::max(a, b), c)); }
+
 float median5(float a, float b, float c, float d, float e) {
-  // Order the pairs (a, b) and (d, e), then put the pair with the smaller head first: a is then
-  // below b, d and e, so it cannot be the median, which is the 2nd smallest of b, c, d, e.
-  if (a > b) std::swap(a, b);
-  if (d > e) std::swap(d, e);
-  if (a > d) {
-    std::swap(a, d);
-    std::swap(b, e);
-  }
-  const float lo = std::min(b, c), hi = std::max(b, c);
-  return std::min(std::max(lo, d), std::min(hi, e));
+  // The smallest and the largest of a, b, c, d cannot be the median: what is left of them is
+  // bounded by the two values below, and the median is that of e and those two. Minima and
+  // maxima only, so the filter's loop runs four readings at a time.
+  return median3(e, std::max(std::min(a, b), std::min(c, d)), std::min(std::max(a, b), std::max(c, d)));
 }
 
 /// Ranges with increasing bearings, optionally decimated, invalid readings as +inf.
 std::vector<float> orderedRanges(const LaserScan& scan, int decimation) {
   const size_t n = scan.ranges.size();
   const size_t step = static_cast<size_t>(std::max(1, decimation));
-  std::vector<float> out;
-  out.reserve((n + step - 1) / step);
+  std::vector<float> out((n + step - 1) / step);
   const bool reversed = scan.angle_increment < 0.0;
-  for (size_t k = 0; k < n; k += step) {
-    const float r = scan.ranges[reversed ? n - 1 - k : k];
-    out.push_back(std::isfinite(r) && r > 0.0f && r < scan.range_max ? r : kNoReturn);
+  for (size_t k = 0; k < out.size(); ++k) {
+    const float r = scan.ranges[reversed ? n - 1 - k * step : k * step];
+    out[k] = std::isfinite(r) && r > 0.0f && r < scan.range_max ? r : kNoReturn;
   }
   return out;
 }
@@ -118,42 +114,69 @@ void fitSlopes(PreparedScan& out, double half_span, double increment) {
   for (size_t i = 1; i < n; ++i) left[i] = same(i, i - 1) ? left[i - 1] + 1 : 0;
   for (size_t i = n - 1; i-- > 0;) right[i] = same(i, i + 1) ? right[i + 1] + 1 : 0;
   constexpr int kMinHalf = 2, kMaxHalf = 12;
+  std::array<double, kMaxHalf + 1> sum_j2{};  // Σ j² over −k…k
+  for (int k = 1; k <= kMaxHalf; ++k) {
+    const double kd = k;
+    sum_j2[static_cast<size_t>(k)] = kd * (kd + 1.0) * (2.0 * kd + 1.0) / 3.0;
+  }
   for (size_t i = 1; i + 1 < n; ++i) {
-    const double arc = out.range[i] * increment;
-    const double wanted = std::clamp(arc > 0.0 ? std::round(half_span / arc) : 0.0, double{kMinHalf}, double{kMaxHalf});
-    const int k = std::min({static_cast<int>(wanted), left[i], right[i]});
+    int wanted = kMinHalf;
+    if (half_span != 0.0) {
+      const double arc = out.range[i] * increment;
+      wanted = static_cast<int>(std::clamp(arc > 0.0 ? std::round(half_span / arc) : 0.0, double{kMinHalf}, double{kMaxHalf}));
+    }
+    const int k = std::min({wanted, left[i], right[i]});
     if (k < 1) continue;
     const size_t a = i - static_cast<size_t>(k), b = i + static_cast<size_t>(k) + 1;
     const double moment = (sum_jr[b] - sum_jr[a]) - static_cast<double>(i) * (sum_r[b] - sum_r[a]);
-    const double kd = k, sum_j2 = kd * (kd + 1.0) * (2.0 * kd + 1.0) / 3.0;
-    out.slope[i] = static_cast<float>(moment / sum_j2);
-    out.slope_variance[i] = static_cast<float>(1.0 / sum_j2);
+    out.slope[i] = static_cast<float>(moment / sum_j2[static_cast<size_t>(k)]);
+    out.slope_variance[i] = static_cast<float>(1.0 / sum_j2[static_cast<size_t>(k)]);
   }
 }
 
+using Doubles = double __attribute__((vector_size(16)));
+
+Doubles squareRoot(Doubles x) {
+#if defined(__SSE2__)
+  return __builtin_ia32_sqrtpd(x);
+#else
+  return Doubles{std::sqrt(x[0]), std::sqrt(x[1])};
+#endif
+}
+
 /// What PSM's joint system needs of the reference alone, so that each match iteration only adds
-/// the pose-dependent part.
+/// the pose-dependent part. Two bearings at a time (SSE2: two doubles), all computed, the unusable
+/// ones then set to NaN.
 void computeSurfaceTerms(PreparedScan& scan) {
+  using Masks = int64_t __attribute__((vector_size(16)));
   const size_t n = scan.size();
   const BeamGeometry& g = *scan.geometry;
   auto& s = scan.surface;
-  for (auto* v : {&s.rho, &s.cos_beta, &s.normal_x, &s.normal_y, &s.rho_cos_beta, &s.beta_variance})
-    v->assign(n, std::numeric_limits<double>::quiet_NaN());
-  for (size_t j = 0; j < n; ++j) {
-    const double slope = scan.slope[j] / g.angle_increment;  // ∂r/∂φ
-    if (scan.bad(j) || !std::isfinite(slope)) continue;
-    const double rho = slope / scan.range[j];
-    const double cos_beta = 1.0 / std::sqrt(1.0 + rho * rho);
-    const double co = g.cos_table[j], si = g.sin_table[j];
-    s.rho[j] = rho;
-    s.cos_beta[j] = cos_beta;
-    s.normal_x[j] = (co + rho * si) * cos_beta;
-    s.normal_y[j] = (si - rho * co) * cos_beta;
-    s.rho_cos_beta[j] = rho * cos_beta;
+  const size_t even = (n + 1) / 2 * 2;  // whole pairs; the spare last entry is cut off at the end
+  for (auto* v : {&s.rho, &s.cos_beta, &s.normal_x, &s.normal_y, &s.rho_cos_beta, &s.beta_variance}) v->resize(even);
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  const double increment = g.angle_increment;
+  auto pair = [&](const auto& v, size_t j) { return Doubles{static_cast<double>(v[j]), static_cast<double>(j + 1 < n ? v[j + 1] : v[j])}; };
+  auto put = [](std::vector<double>& v, size_t j, Doubles x) { std::memcpy(&v[j], &x, sizeof(x)); };
+  const Doubles nans{nan, nan};
+  for (size_t j = 0; j < n; j += 2) {
+    const Doubles slope = pair(scan.slope, j) / increment;  // ∂r/∂φ
+    const Masks finite = (slope < inf) & (slope > -inf);
+    const Masks usable = finite & Masks{scan.flags[j] == 0 ? -1 : 0, j + 1 < n && scan.flags[j + 1] == 0 ? -1 : 0};
+    const Doubles r = pair(scan.range, j);
+    const Doubles rho = slope / r;
+    const Doubles cos_beta = 1.0 / squareRoot(1.0 + rho * rho);
+    const Doubles co = pair(g.cos_table, j), si = pair(g.sin_table, j);
     // ρ = (∂r/∂j)/(r·Δφ) and dβ/dρ = cos²β.
-    const double cos2 = cos_beta * cos_beta, arc = scan.range[j] * g.angle_increment;
-    s.beta_variance[j] = cos2 * cos2 * scan.slope_variance[j] / (arc * arc);
+    const Doubles cos2 = cos_beta * cos_beta, arc = r * increment;
+    put(s.rho, j, usable ? rho : nans);
+    put(s.cos_beta, j, usable ? cos_beta : nans);
+    put(s.normal_x, j, usable ? (co + rho * si) * cos_beta : nans);
+    put(s.normal_y, j, usable ? (si - rho * co) * cos_beta : nans);
+    put(s.rho_cos_beta, j, usable ? rho * cos_beta : nans);
+    put(s.beta_variance, j, usable ? cos2 * cos2 * pair(scan.slope_variance, j) / (arc * arc) : nans);
   }
+  for (auto* v : {&s.rho, &s.cos_beta, &s.normal_x, &s.normal_y, &s.rho_cos_beta, &s.beta_variance}) v->resize(n);
 }
 
 }  // namespace
@@ -163,10 +186,14 @@ void medianFilter5(const std::vector<float>& in, std::vector<float>& out) {
   out.resize(n);
   if (n == 0) return;
   auto at = [&](std::ptrdiff_t i) { return in[static_cast<size_t>(std::clamp<std::ptrdiff_t>(i, 0, static_cast<std::ptrdiff_t>(n) - 1))]; };
-  for (size_t k = 0; k < n; ++k) {
+  auto clamped = [&](size_t k) {
     const auto i = static_cast<std::ptrdiff_t>(k);
     out[k] = median5(at(i - 2), at(i - 1), at(i), at(i + 1), at(i + 2));
-  }
+  };
+  for (size_t k = 0; k < std::min<size_t>(2, n); ++k) clamped(k);
+  const float* p = in.data();
+  for (size_t k = 2; k + 2 < n; ++k) out[k] = median5(p[k - 2], p[k - 1], p[k], p[k + 1], p[k + 2]);
+  for (size_t k = std::max<size_t>(2, n >= 2 ? n - 2 : 0); k < n; ++k) clamped(k);
 }
 
 void segmentScan(const std::vector<float>& range, const std::vector<uint8_t>& flags, double max_distance,
@@ -291,7 +318,6 @@ PreparedScan prepareScan(const LaserScan& scan, const PsmParams& params) {
     if (out.segment[i] != 0 && out.segment[i] == out.segment[i - 1]) out.pair_mask[i] = -1;
   fitSlopes(out, params.slope_half_span, increment);
   computeSurfaceTerms(out);
-  out.corridor = detectCorridor(out, params.corridor_threshold);
   return out;
 }
 

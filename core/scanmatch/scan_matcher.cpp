@@ -254,8 +254,9 @@ double shiftCost(const float* p, const float* pm, const float* r, const float* r
 }
 
 void decimate(const std::vector<float>& in, int stride, std::vector<float>& out) {
-  out.clear();
-  for (size_t i = 0; i < in.size(); i += static_cast<size_t>(stride)) out.push_back(in[i]);
+  const auto step = static_cast<size_t>(stride);
+  out.resize((in.size() + step - 1) / step);
+  for (size_t k = 0; k < out.size(); ++k) out[k] = in[k * step];
 }
 
 }  // namespace
@@ -408,7 +409,6 @@ bool iterationEnds(MatchResult& result, StopRule& stop, double max_range) {
 MatchResult ScanMatcher::startResult(const PreparedScan& ref, const PreparedScan& cur, const Pose2& guess) const {
   MatchResult result;
   result.pose = guess;
-  result.corridor = ref.corridor.is_corridor;
   if (ref.valid_count < params_.min_valid_points || cur.valid_count < params_.min_valid_points)
     result.status = MatchStatus::NotEnoughPoints;
   return result;
@@ -616,7 +616,6 @@ MatchResult ScanMatcher::matchIcp(const PreparedScan& ref, const PreparedScan& c
 void ScanMatcher::estimateCovariance(const PreparedScan& ref, const PreparedScan& cur, MatchResult& result) {
   projectScan(*ref.geometry, cur, result.pose, projection_);
   const JointSystem system = jointSystem(ref, result.pose, params_.late_weighting_factor);
-  result.corridor = ref.corridor.is_corridor;
   result.error_index = system.error_index;
   result.cov = params_.covariance == CovarianceModel::Wls ? covarianceFrom(system)
                                                            : heuristicCovariance(ref, system.error_index);
@@ -627,8 +626,9 @@ Mat3 ScanMatcher::heuristicCovariance(const PreparedScan& ref, double error_inde
   // The scale is computed in centimetres, as in the original (§11.2, §14.8).
   const double scale = std::max(1.0, 100.0 * error_index - h.error_offset_cm);
   Mat3 cov = Mat3::Zero();
-  if (ref.corridor.is_corridor) {
-    const double a = ref.corridor.angle, ca = std::cos(a), sa = std::sin(a);
+  const CorridorInfo corridor = detectCorridor(ref, params_.corridor_threshold);
+  if (corridor.is_corridor) {
+    const double a = corridor.angle, ca = std::cos(a), sa = std::sin(a);
     const double along = h.sigma_along * h.sigma_along, across = h.sigma_across * h.sigma_across;
     cov(0, 0) = scale * (ca * ca * along + sa * sa * across);
     cov(0, 1) = cov(1, 0) = scale * ca * sa * (along - across);

@@ -36,7 +36,6 @@ struct MatchResult {
   int valid_points = 0;      ///< associated bearings (PSM, PSM-C) or trimmed pairs (ICP) at the end
   bool converged = false;    ///< the stop rule fired before the iteration limit
   double error_index = 0.0;  ///< m, mean |range residual| of associated bearings (§11.2 pm_error_index2)
-  bool corridor = false;     ///< the reference scan looks like a corridor (§11.2)
   bool ok() const { return status == MatchStatus::Ok; }
 };
 
@@ -52,7 +51,7 @@ class ScanMatcher {
   MatchResult matchPsmC(const PreparedScan& ref, const PreparedScan& cur, const Pose2& guess);
   MatchResult matchIcp(const PreparedScan& ref, const PreparedScan& cur, const Pose2& guess);
 
-  /// Covariance of a converged pose by the configured model (§11); fills cov, error_index, corridor.
+  /// Covariance of a converged pose by the configured model (§11); fills cov and error_index.
   void estimateCovariance(const PreparedScan& ref, const PreparedScan& cur, MatchResult& result);
   Mat3 heuristicCovariance(const PreparedScan& ref, double error_index) const;
 

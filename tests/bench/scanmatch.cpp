@@ -498,9 +498,11 @@ void mitExperiments(const Options& o) {
     // A failure within 5 cm / 1° across a corridor the reference scan shows lies along its free
     // axis: there the reference pose itself is the odometry's (PSM and ICP+i both keep the guess
     // along an axis no reading constrains), so such a failure says nothing of the matcher.
-    auto alongFreeAxis = [](const MatchResult& m, const RealPair& p) {
-      if (!m.ok() || !p.ref.corridor.is_corridor) return false;
-      const double a = p.ref.corridor.angle;
+    auto alongFreeAxis = [&o](const MatchResult& m, const RealPair& p) {
+      if (!m.ok()) return false;
+      const CorridorInfo corridor = detectCorridor(p.ref, o.psm.corridor_threshold);
+      if (!corridor.is_corridor) return false;
+      const double a = corridor.angle;
       const Vec2 error = m.pose.translation() - p.truth.translation();
       const double across = std::abs(-std::sin(a) * error.x() + std::cos(a) * error.y());
       return across <= 0.05 && fixtures::poseError(m.pose, p.truth).rotation <= deg2rad(1.0);
@@ -556,7 +558,7 @@ void mitExperiments(const Options& o) {
       const auto e = fixtures::poseError(res.pose, rel_k.motion());
       t.push_back(e.translation);
       r.push_back(rad2deg(e.rotation));
-      (res.corridor ? nees_corridor : nees_room).push_back(fixtures::nees(res.pose, rel_k.motion(), res.cov));
+      (detectCorridor(pa, m.params.corridor_threshold).is_corridor ? nees_corridor : nees_room).push_back(fixtures::nees(res.pose, rel_k.motion(), res.cov));
     }
     std::printf("      %-13s %9zu %10.2f %10.2f %10.3f %12.2f %12.2f\n", m.name.c_str(), t.size(), 1000 * mean(t),
                 1000 * median(t), mean(r), mean(nees_room), mean(nees_corridor));

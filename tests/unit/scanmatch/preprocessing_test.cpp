@@ -199,26 +199,27 @@ TEST(FastAtan2, MatchesLibmEverywhere) {
 TEST(Corridor, DetectedInCorridorsNotInRooms) {
   PsmParams params;
   const fixtures::ScanSpec spec;
-  const PreparedScan corridor = prepareScan(fixtures::simulateScan(fixtures::psmTestCorridor(), {}, spec), params);
-  EXPECT_TRUE(corridor.corridor.is_corridor);
-  EXPECT_NEAR(std::min(corridor.corridor.angle, std::numbers::pi - corridor.corridor.angle), 0.0, deg2rad(1.0));
-  const PreparedScan room = prepareScan(fixtures::simulateScan(fixtures::psmTestRoom(), {}, spec), params);
-  EXPECT_FALSE(room.corridor.is_corridor);
-  const PreparedScan office =
-      prepareScan(fixtures::simulateScan(fixtures::clutteredOffice(), {0.5, 0.2, 0.7}, spec), params);
-  EXPECT_FALSE(office.corridor.is_corridor);
+  auto corridorOf = [&](const World& world, const Pose2& pose) {
+    return detectCorridor(prepareScan(fixtures::simulateScan(world, pose, spec), params), params.corridor_threshold);
+  };
+  const CorridorInfo corridor = corridorOf(fixtures::psmTestCorridor(), {});
+  EXPECT_TRUE(corridor.is_corridor);
+  EXPECT_NEAR(std::min(corridor.angle, std::numbers::pi - corridor.angle), 0.0, deg2rad(1.0));
+  EXPECT_FALSE(corridorOf(fixtures::psmTestRoom(), {}).is_corridor);
+  EXPECT_FALSE(corridorOf(fixtures::clutteredOffice(), {0.5, 0.2, 0.7}).is_corridor);
 }
 
 TEST(Corridor, AngleFollowsTheCorridorInTheLaserFrame) {
   PsmParams params;
   const fixtures::ScanSpec spec;
   for (double heading : {0.3, 1.0, -0.6}) {
-    const PreparedScan s =
-        prepareScan(fixtures::simulateScan(fixtures::officeCorridor(), {0.0, 0.2, heading}, spec), params);
-    EXPECT_TRUE(s.corridor.is_corridor) << heading;
+    const CorridorInfo corridor = detectCorridor(
+        prepareScan(fixtures::simulateScan(fixtures::officeCorridor(), {0.0, 0.2, heading}, spec), params),
+        params.corridor_threshold);
+    EXPECT_TRUE(corridor.is_corridor) << heading;
     // the corridor runs along world x, i.e. at −heading in the laser frame (mod π)
     const double expected = std::fmod(-heading + 2.0 * std::numbers::pi, std::numbers::pi);
-    double d = std::abs(s.corridor.angle - expected);
+    double d = std::abs(corridor.angle - expected);
     d = std::min(d, std::numbers::pi - d);
     EXPECT_LT(d, deg2rad(2.0)) << heading;
   }
