@@ -648,10 +648,14 @@ ScanMatcher::JointSystem ScanMatcher::jointSystem(const PreparedScan& ref, const
   const PreparedScan::SurfaceTerms& surface = ref.surface;
   const double min_range = params_.min_range, max_range = params_.max_range;
   const double max_error = params_.max_error, max_slope = params_.max_slope;
-  double a11 = 0, a12 = 0, a13 = 0, a22 = 0, a23 = 0, a33 = 0, g1 = 0, g2 = 0, g3 = 0;
+  // The sums in pairs, two lanes of one register each, so that all of them stay in registers
+  // (twelve scalar sums did not: each addition went through the stack). Each lane adds the same
+  // terms in the same order as a scalar sum would.
+  using Pair = double __attribute__((vector_size(16)));
+  Pair a11_a22{0, 0}, a12_a23{0, 0}, a13_a33{0, 0}, g1_g2{0, 0}, g3_w{0, 0};
   const bool slope_noise = params_.slope_noise_correction;
   Mat3 spurious = Mat3::Zero();
-  double sum_w = 0.0, sum_we2 = 0.0, sum_abs = 0.0;
+  double sum_we2 = 0.0, sum_abs = 0.0;
   int used = 0, gated = 0;
   const size_t n = ref.size();
   for (size_t j = 0; j < n; ++j) {
@@ -675,11 +679,13 @@ ScanMatcher::JointSystem ScanMatcher::jointSystem(const PreparedScan& ref, const
     const double h3 = pose.y * h1 - pose.x * h2 - surface.rho_cos_beta[j] * r;
     const double en = e * surface.cos_beta[j];
     const double w = c / (c + e * e);
-    const double wh1 = w * h1, wh2 = w * h2, wh3 = w * h3;
-    a11 += wh1 * h1; a12 += wh1 * h2; a13 += wh1 * h3;
-    a22 += wh2 * h2; a23 += wh2 * h3; a33 += wh3 * h3;
-    g1 += wh1 * en; g2 += wh2 * en; g3 += wh3 * en;
-    sum_w += w;
+    const Pair wh1_wh2 = Pair{w, w} * Pair{h1, h2};
+    const double wh1 = wh1_wh2[0], wh3 = w * h3;
+    a11_a22 += wh1_wh2 * Pair{h1, h2};
+    a12_a23 += wh1_wh2 * Pair{h2, h3};
+    a13_a33 += Pair{wh1, wh3} * Pair{h3, h3};
+    g1_g2 += wh1_wh2 * Pair{en, en};
+    g3_w += Pair{wh3, w} * Pair{en, 1.0};
     sum_we2 += w * en * en;
     ++used;
     if (slope_noise) {
@@ -691,9 +697,11 @@ ScanMatcher::JointSystem ScanMatcher::jointSystem(const PreparedScan& ref, const
   }
   JointSystem system;
   system.slope_noise = spurious;
+  const double a11 = a11_a22[0], a22 = a11_a22[1], a12 = a12_a23[0], a23 = a12_a23[1];
+  const double a13 = a13_a33[0], a33 = a13_a33[1];
   system.information << a11, a12, a13, a12, a22, a23, a13, a23, a33;
-  system.gradient << g1, g2, g3;
-  system.sum_w = sum_w;
+  system.gradient << g1_g2[0], g1_g2[1], g3_w[0];
+  system.sum_w = g3_w[1];
   system.sum_we2 = sum_we2;
   system.used = used;
   system.error_index = gated > 0 ? sum_abs / gated : params_.max_error;
