@@ -22,6 +22,9 @@ void describeMatcher(ParameterTable& t, PsmParams& p) {
   t.integer("max_iterations", p.max_iterations, 1, 10000, "iterations at most");
   t.number("stop_translation", p.stop_translation, 0.0, 1.0, "m: convergence test");
   t.angle("stop_rotation_deg", p.stop_rotation, 0.0, 10.0, "convergence test");
+  t.number("joint_switch_translation", p.joint_switch_translation, 0.0, 10.0,
+           "m: alternating steps below this (and the rotation below) switch to joint (x, y, θ) steps");
+  t.angle("joint_switch_rotation_deg", p.joint_switch_rotation, 0.0, 180.0, "the same for the orientation step");
   t.choice(
       "covariance", {"wls", "heuristic"}, [&p](const std::string& w) { return parseCovarianceModel(w, p.covariance); },
       [&p] { return std::string(covarianceModelName(p.covariance)); }, "match covariance model");
