@@ -154,6 +154,8 @@ MatchResult ScanMatcher::match(const PreparedScan& ref, const PreparedScan& cur,
   return matchPsm(ref, cur, guess);
 }
 
+double ScanMatcher::stepMinPoints() const { return params_.step_min_points_fraction * params_.min_valid_points; }
+
 bool ScanMatcher::usableSample(const PreparedScan& ref, size_t j) const {
   const float r = projection_.range[j];
   return !ref.bad(j) && projection_.tag[j] == 0 && r > params_.min_range && r < params_.max_range;
@@ -190,7 +192,7 @@ ScanMatcher::TranslationStep ScanMatcher::solveTranslation(const PreparedScan& r
     // at grazing angles neither dominate nor slow convergence down.
     const JointSystem system = jointSystem(ref, pose, c);
     step.used = system.used;
-    if (step.used < params_.min_valid_points) {
+    if (step.used < stepMinPoints()) {
       step.status = MatchStatus::NotEnoughPoints;
       return step;
     }
@@ -218,7 +220,7 @@ ScanMatcher::TranslationStep ScanMatcher::solveTranslation(const PreparedScan& r
       ++step.used;
     }
   }
-  if (step.used < params_.min_valid_points) {
+  if (step.used < stepMinPoints()) {
     step.status = MatchStatus::NotEnoughPoints;
     return step;
   }
@@ -283,7 +285,7 @@ ScanMatcher::OrientationStep ScanMatcher::searchOrientation(const PreparedScan& 
       int overlap = 0;
       e = shiftCost(proj_masked_.data(), proj_mask_.data(), ref.masked_range.data(), ref.mask.data(), size, k,
                     truncation, overlap);
-      if (overlap < params_.min_valid_points) e = kInf;
+      if (overlap < stepMinPoints()) e = kInf;
     }
     return e;
   };
@@ -304,7 +306,7 @@ ScanMatcher::OrientationStep ScanMatcher::searchOrientation(const PreparedScan& 
       int overlap = 0;
       const double e = shiftCost(coarse_[0].data(), coarse_[1].data(), coarse_[2].data(), coarse_[3].data(),
                                  coarse_size, m, truncation, overlap);
-      if (overlap * stride >= params_.min_valid_points && e < best) {
+      if (overlap * stride >= stepMinPoints() && e < best) {
         best = e;
         best_k = m * stride;
       }
@@ -467,13 +469,22 @@ MatchResult ScanMatcher::matchPsm(const PreparedScan& ref, const PreparedScan& c
   }
   result.iterations = iteration;
   if (!result.ok()) return result;
-  if (joint && result.converged) {  // the last system was set up one (tiny) step before the end
-    result.error_index = system.error_index;
-    result.cov = params_.covariance == CovarianceModel::Wls ? covarianceFrom(system)
-                                                             : heuristicCovariance(ref, system.error_index);
-  } else {
-    estimateCovariance(ref, cur, result);
+  // The last joint system was set up one (tiny) step before the end; otherwise the final pose
+  // gets its own.
+  if (!(joint && result.converged)) {
+    projectScan(*ref.geometry, cur, result.pose, projection_);
+    system = jointSystem(ref, result.pose, params_.late_weighting_factor);
+    result.valid_points = system.used;
+    // The alternating steps may have had fewer (stepMinPoints); the answer may not. (A joint
+    // step needs them all.)
+    if (params_.step_min_points_fraction < 1.0 && system.used < params_.min_valid_points) {
+      result.status = MatchStatus::NotEnoughPoints;
+      return result;
+    }
   }
+  result.error_index = system.error_index;
+  result.cov = params_.covariance == CovarianceModel::Wls ? covarianceFrom(system)
+                                                           : heuristicCovariance(ref, system.error_index);
   return result;
 }
 

@@ -87,6 +87,9 @@ class ScanMatcher {
   /// The result every method starts from: the guess, or NotEnoughPoints for a scan too sparse.
   MatchResult startResult(const PreparedScan& ref, const PreparedScan& cur, const Pose2& guess) const;
   bool usableSample(const PreparedScan& ref, size_t j) const;
+  /// Associated bearings a step on the way needs (an orientation search's overlap, a translation
+  /// step's samples): from a far guess fewer associate, and the step still points the right way.
+  double stepMinPoints() const;
 
   double weightingFactor(int iteration, const PreparedScan& ref) const;
   double projectedErrorIndex(const PreparedScan& ref) const;

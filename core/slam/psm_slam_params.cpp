@@ -13,6 +13,8 @@ void describeMatcher(ParameterTable& t, PsmParams& p) {
   t.number("slope_half_span", p.slope_half_span, 0.0, 1.0, "m: surface slopes fitted over this much arc either side at least");
   t.integer("decimation", p.decimation, 1, 100, "keep every n-th beam");
   t.integer("min_valid_points", p.min_valid_points, 3, 100000, "fewer usable readings: no match");
+  t.number("step_min_points_fraction", p.step_min_points_fraction, 0.05, 1.0,
+           "the steps on the way need this fraction of min_valid_points (1 = the original)");
   t.angle("search_window_deg", p.search_window, 0.5, 180.0, "orientation search window");
   t.angle("initial_search_window_deg", p.initial_search_window, 0.5, 180.0, "first orientation step's window");
   t.angle("coarse_search_step_deg", p.coarse_search_step, 0.0, 45.0, "coarse-to-fine step (0 = exhaustive)");

@@ -1,5 +1,6 @@
 // PSM, PSM-C and ICP against ray-cast ground truth: the v0.3 unit-test room and corridor
 // (docs/algorithms.md §15.1), accuracy on noisy pairs, the basin of convergence and covariance honesty.
+#include <array>
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -174,12 +175,45 @@ TEST(PsmBasin, WiderThanTheOriginalWindow) {
   original.orientation_refinement = OrientationRefinement::Parabola;
   original.surface_jacobian = false;
   original.joint_refinement = false;
+  original.step_min_points_fraction = 1.0;
   auto pairs = officePairs(150, 13, 0.1, deg2rad(45.0), 0.01, wide);
   const Outcome w = runPairs(pairs, MatchMethod::Psm, wide), o = runPairs(pairs, MatchMethod::Psm, original);
   std::printf("[ basin ] heading errors up to 45 deg: wide search %.1f %%, original window %.1f %%\n",
               100 * w.success_rate, 100 * o.success_rate);
   EXPECT_GT(w.success_rate, o.success_rate + 0.1);
   EXPECT_GE(w.success_rate, 0.9);
+}
+
+TEST(PsmBasin, StepsOnTheWayNeedOnlyPartOfTheSupport) {
+  // Readings within 3 m only: from a guess 0.5 m and 30° off, fewer than min_valid_points bearings
+  // associate at first. Refusing to step there refuses matches that converge; the answer itself
+  // still needs them all.
+  PsmParams relaxed;
+  relaxed.max_range = 3.0;
+  PsmParams strict = relaxed;
+  strict.step_min_points_fraction = 1.0;
+  auto pairs = officePairs(300, 14, 0.5, deg2rad(30.0), 0.01, relaxed);
+  auto count = [&](const PsmParams& params) {
+    ScanMatcher matcher(params);
+    int ok = 0, refused = 0, wrong = 0;
+    for (const PairCase& p : pairs) {
+      const MatchResult m = matcher.match(p.ref, p.cur, p.guess);
+      const auto e = poseError(m.pose, p.truth);
+      if (!m.ok()) ++refused;
+      else if (e.translation <= 0.05 && e.rotation <= deg2rad(1.0)) ++ok;
+      else ++wrong;
+      if (m.ok()) {
+        EXPECT_GE(m.valid_points, params.min_valid_points);
+      }
+    }
+    return std::array<int, 3>{ok, refused, wrong};
+  };
+  const auto r = count(relaxed), s = count(strict);
+  std::printf("[ support ] relaxed: %d ok, %d refused, %d wrong; strict: %d ok, %d refused, %d wrong\n", r[0], r[1], r[2],
+              s[0], s[1], s[2]);
+  EXPECT_GT(r[0], s[0] + 3);
+  EXPECT_LT(r[1], s[1]);
+  EXPECT_LE(r[2], s[2] + 2);  // some of what was refused converges elsewhere: few
 }
 
 TEST(PsmBasin, HeadingErrorBeyondEveryWindowFailsCleanly) {
