@@ -482,9 +482,7 @@ MatchResult ScanMatcher::matchPsm(const PreparedScan& ref, const PreparedScan& c
       return result;
     }
   }
-  result.error_index = system.error_index;
-  result.cov = params_.covariance == CovarianceModel::Wls ? covarianceFrom(system)
-                                                           : heuristicCovariance(ref, system.error_index);
+  fillCovariance(ref, system, result);
   return result;
 }
 
@@ -626,7 +624,10 @@ MatchResult ScanMatcher::matchIcp(const PreparedScan& ref, const PreparedScan& c
 
 void ScanMatcher::estimateCovariance(const PreparedScan& ref, const PreparedScan& cur, MatchResult& result) {
   projectScan(*ref.geometry, cur, result.pose, projection_);
-  const JointSystem system = jointSystem(ref, result.pose, params_.late_weighting_factor);
+  fillCovariance(ref, jointSystem(ref, result.pose, params_.late_weighting_factor), result);
+}
+
+void ScanMatcher::fillCovariance(const PreparedScan& ref, const JointSystem& system, MatchResult& result) const {
   result.error_index = system.error_index;
   result.cov = params_.covariance == CovarianceModel::Wls ? covarianceFrom(system)
                                                            : heuristicCovariance(ref, system.error_index);

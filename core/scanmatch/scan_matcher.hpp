@@ -96,6 +96,8 @@ class ScanMatcher {
   TranslationStep solveTranslation(const PreparedScan& ref, const Pose2& pose, double c);
   JointSystem jointSystem(const PreparedScan& ref, const Pose2& pose, double c) const;
   Mat3 covarianceFrom(const JointSystem& system) const;
+  /// error_index and cov of `result` from the system at its final pose, by the configured model.
+  void fillCovariance(const PreparedScan& ref, const JointSystem& system, MatchResult& result) const;
   OrientationStep searchOrientation(const PreparedScan& ref, double window, double c);
   double gradientRefinement(const PreparedScan& ref, int shift, double c) const;
   CartesianStep solveCartesian(const PreparedScan& ref, double c);

@@ -1,10 +1,10 @@
 // PSM, PSM-C and ICP against ray-cast ground truth: the v0.3 unit-test room and corridor
 // (docs/algorithms.md §15.1), accuracy on noisy pairs, the basin of convergence and covariance honesty.
-#include <array>
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <vector>
