@@ -185,7 +185,8 @@ int CorrelativeMapSearch::nodeSum(const HeadingGroups& groups, int group_index, 
   const size_t n = groups.points, begin = static_cast<size_t>(group_index) * n;
   if (window_level >= static_cast<int>(levels_.size())) return scale * static_cast<int>(n);
   // Most nodes scored are pruned: once the points so far fall short of a perfect score by more
-  // than max_deficit, the sum so far is returned (it is below what the node needs, as the whole is).
+  // than max_deficit, the sum so far plus a perfect score for the rest is returned (a bound, below
+  // what the node needs, as the whole is).
   constexpr size_t kBatch = 8;
   int sum = 0;
   if (x + group.min_dx >= 0 && y + group.min_dy >= 0 && x + group.max_dx < width_ && y + group.max_dy < height_) {
@@ -196,7 +197,7 @@ int CorrelativeMapSearch::nodeSum(const HeadingGroups& groups, int group_index, 
     size_t i = 0;
     for (; i + kBatch <= n; i += kBatch) {
       for (size_t k = i; k < i + kBatch; ++k) sum += base[offsets[k]];
-      if (scale * static_cast<int>(i + kBatch) - sum > max_deficit) return sum;
+      if (scale * static_cast<int>(i + kBatch) - sum > max_deficit) return sum + scale * static_cast<int>(n - i - kBatch);
     }
     for (; i < n; ++i) sum += base[offsets[i]];
   } else {
@@ -204,7 +205,7 @@ int CorrelativeMapSearch::nodeSum(const HeadingGroups& groups, int group_index, 
     const int* dy = &groups.dy[begin];
     for (size_t i = 0; i < n; ++i) {
       sum += cellValue(window_level, x + dx[i], y + dy[i]);
-      if (scale * static_cast<int>(i + 1) - sum > max_deficit) return sum;
+      if (scale * static_cast<int>(i + 1) - sum > max_deficit) return sum + scale * static_cast<int>(n - i - 1);
     }
   }
   return sum;
@@ -342,7 +343,7 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
     ++result.scored_nodes;
     const int sum = nodeSum(groups, group, level, x, y, max_deficit);
     if (score_of(sum) >= threshold) open.push(sum, {x, y, level, group, sum});
-    else if (setting_aside) set_aside.push_back({x, y, level, group, 0});
+    else if (setting_aside) set_aside.push_back({x, y, level, group, sum});
   };
   const int root_level = groups[roots_begin].level;
   for (size_t g = roots_begin; g < groups.size() && groups[g].level == root_level; ++g)
@@ -376,7 +377,8 @@ CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& poin
       max_deficit = allowed_deficit(threshold);
       if (setting_aside) {
         setting_aside = false;
-        for (const Node& aside : set_aside) consider(aside.x, aside.y, aside.level, aside.group);
+        for (const Node& aside : set_aside)
+          if (score_of(aside.sum) >= threshold) consider(aside.x, aside.y, aside.level, aside.group);
         set_aside = {};
       }
       continue;

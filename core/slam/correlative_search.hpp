@@ -122,7 +122,8 @@ class CorrelativeMapSearch {
   int cellValue(int level, int x, int y) const;
   /// Upper bound of the score of every pose in the node (the exact score of a single pose), as the
   /// sum of the cell values (at most kScoreScale per point); once it falls short of a perfect sum by
-  /// more than `max_deficit`, some lower value (the node is pruned either way).
+  /// more than `max_deficit`, the points so far plus a perfect score for the rest (a looser bound,
+  /// still short by more than `max_deficit`: the node is pruned either way).
   int nodeSum(const HeadingGroups& groups, int group, int level, int x, int y, int max_deficit) const;
   bool regionAllows(int level, int x, int y) const;
   double headingStep(double reach) const;

@@ -77,7 +77,7 @@ struct MapLocalizationParams {
   double global_resolution = 0.05;       ///< m
   double global_sigma = 0.1;             ///< m
   double global_region_radius = 1.5;     ///< m
-  int global_points = 100;
+  int global_points = 64;
   double global_min_score = 0.65;
   double global_score_margin = 0.05;
   double global_misfit_ratio = 2.0;

@@ -185,8 +185,8 @@ TEST(CorrelativeMapSearch, ReportsEveryPlaceWithinTheMarginAsScoringEveryPoseDoe
 }
 
 // A search that needs its best place to score best_at_least sets lower nodes aside and takes them
-// up again once it has one: the same places as a search from min_score; none if no pose scores
-// that much; the best alone when no rivals are wanted.
+// up again once it has one, those that may reach the rivals' threshold: the same places as a
+// search from min_score; none if no pose scores that much; the best alone when no rivals are wanted.
 TEST(CorrelativeMapSearch, ABestPlaceThresholdFindsTheSamePlacesOrNone) {
   const std::vector<Vec2> map =
       pointsOf({{{0, 0}, {5, 0}}, {{5, 0}, {5, 3}}, {{5, 3}, {0, 3}}, {{0, 3}, {0, 1.8}}, {{0, 1.2}, {0, 0}}}, 0.05);
@@ -206,6 +206,13 @@ TEST(CorrelativeMapSearch, ABestPlaceThresholdFindsTheSamePlacesOrNone) {
     EXPECT_NEAR(from_best.places[i].score, all.places[i].score, 1e-12);
     EXPECT_TRUE(isNear(from_best.places[i].pose, all.places[i].pose, query.rival_distance, query.rival_heading));
   }
+  // Where the rivals' threshold (best − rival_margin) is above best_at_least, what was set aside
+  // scored too little for it: nothing is scored twice.
+  query.best_at_least = best - 0.2;
+  const CorrelativeSearchResult from_below = search.find(points, query);
+  ASSERT_EQ(from_below.places.size(), all.places.size());
+  for (size_t i = 0; i < all.places.size(); ++i) EXPECT_NEAR(from_below.places[i].score, all.places[i].score, 1e-12);
+  EXPECT_LE(from_below.scored_nodes, all.scored_nodes);
   query.best_at_least = best + 0.01;
   EXPECT_TRUE(search.find(points, query).places.empty()) << "no pose scores more than the best";
   query.best_at_least = 0.0;
