@@ -54,15 +54,8 @@ namespace {
 
 StoredMap mapToLoad(const SavedMapOptions& o) { return o.loaded_map ? *o.loaded_map : loadMap(o.load_map); }
 
-}  // namespace
-
-std::unique_ptr<Estimator> makePsmSlamEstimator(PsmSlamEstimatorConfig config, const SavedMapOptions& o) {
-  if (o.load_map.empty()) {
-    if (o.initial_pose) throw std::runtime_error("--initial-pose goes with --load-map");
-    auto estimator = std::make_unique<PsmSlamEstimator>(std::move(config));
-    estimator->saveMapTo(o.save_map);
-    return estimator;
-  }
+/// The estimator working in the map o.load_map.
+std::unique_ptr<Estimator> makeMapEstimator(PsmSlamEstimatorConfig config, const SavedMapOptions& o) {
   if (o.mode == "continue") {
     auto estimator =
         std::make_unique<MapContinuationEstimator>(mapToLoad(o), std::move(config), o.initial_pose, o.initial_cov,
@@ -74,6 +67,22 @@ std::unique_ptr<Estimator> makePsmSlamEstimator(PsmSlamEstimatorConfig config, c
   if (!o.save_map.empty()) throw std::runtime_error("--mode localize adds nothing to the map: no --save-map");
   return std::make_unique<MapLocalizationEstimator>(mapToLoad(o), std::move(config), o.initial_pose,
                                                     o.initial_cov);
+}
+
+}  // namespace
+
+std::unique_ptr<Estimator> makePsmSlamEstimator(PsmSlamEstimatorConfig config, const SavedMapOptions& o) {
+  if (o.load_map.empty()) {
+    if (o.initial_pose) throw std::runtime_error("--initial-pose goes with --load-map");
+    auto estimator = std::make_unique<PsmSlamEstimator>(std::move(config));
+    estimator->saveMapTo(o.save_map);
+    return estimator;
+  }
+  try {
+    return makeMapEstimator(std::move(config), o);
+  } catch (const std::length_error& e) {  // a map too wide for its grids: say which
+    throw std::length_error("map '" + o.load_map + "': " + e.what());
+  }
 }
 
 PsmSlamSession::PsmSlamSession(PsmSlamEstimatorConfig config, const SavedMapOptions& options)

@@ -1,5 +1,7 @@
 #include "slam/correlative_search.hpp"
 
+#include "slam/map_fit_field.hpp"
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -7,6 +9,7 @@
 #include <limits>
 #include <numbers>
 #include <queue>
+#include <stdexcept>
 
 namespace polarslam {
 namespace {
@@ -107,8 +110,10 @@ CorrelativeMapSearch::CorrelativeMapSearch(const std::vector<Vec2>& map_points,
   const double res = params_.resolution;
   const double margin = params_.region_radius + 3.0 * params_.sigma + 2.0 * res;
   origin_ = lo - Vec2(margin, margin);
-  width_ = static_cast<int>(std::ceil((hi.x() - lo.x() + 2.0 * margin) / res)) + 1;
-  height_ = static_cast<int>(std::ceil((hi.y() - lo.y() + 2.0 * margin) / res)) + 1;
+  const Vec2 cells_wide = ((hi - lo).array() + 2.0 * margin).matrix() / res;
+  requireGridWithin(cells_wide, res, params_.max_cells, "the global search");
+  width_ = static_cast<int>(std::ceil(cells_wide.x())) + 1;
+  height_ = static_cast<int>(std::ceil(cells_wide.y())) + 1;
   const size_t cells = static_cast<size_t>(width_) * static_cast<size_t>(height_);
 
   // Both rasters are a value per cell by its distance to the nearest of a set of points: the score

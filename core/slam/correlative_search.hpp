@@ -36,6 +36,9 @@ struct CorrelativeSearchParams {
   double sigma = 0.1;          ///< m: the likelihood field's spread
   double region_radius = 1.5;  ///< m: robot positions searched around each reference pose
   int levels = 8;              ///< precomputed grids; the coarsest node spans 2^(levels-1) cells
+  /// Largest grid, in cells of `resolution` (the default: 410 m × 410 m at 5 cm; each cell takes
+  /// 2 · levels + 1 bytes once built): a map spreading wider is refused (std::length_error).
+  size_t max_cells = size_t{1} << 26;
 };
 
 struct CorrelativeHit {
@@ -67,7 +70,8 @@ struct CorrelativeSearchResult {
 class CorrelativeMapSearch {
  public:
   /// `map_points` in the map frame; robot positions are searched within region_radius of
-  /// `reference_positions`. An empty map gives a search that finds nothing.
+  /// `reference_positions`. An empty map gives a search that finds nothing. Throws
+  /// std::length_error when the grid would need more than params.max_cells.
   CorrelativeMapSearch(const std::vector<Vec2>& map_points, const std::vector<Vec2>& reference_positions,
                        CorrelativeSearchParams params);
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <stdexcept>
 
 namespace polarslam {
 namespace {
@@ -33,7 +35,17 @@ MapFitField::MapFitField(const std::vector<LaserScan>& scans, const std::vector<
                          double fit_distance, double resolution)
     : MapFitField(mapEndpoints(scans, poses, max_range), max_range, fit_distance, resolution) {}
 
-MapFitField::MapFitField(const std::vector<Vec2>& points, double max_range, double fit_distance, double resolution)
+void requireGridWithin(const Vec2& cells_wide, double resolution, size_t max_cells, const char* what) {
+  const double cells = (std::ceil(cells_wide.x()) + 1.0) * (std::ceil(cells_wide.y()) + 1.0);
+  if (cells <= static_cast<double>(max_cells)) return;
+  char text[256];
+  std::snprintf(text, sizeof text, "%s: the map spans %.4g m x %.4g m, %.3g cells at %g m, more than max_cells (%zu)", what,
+                cells_wide.x() * resolution, cells_wide.y() * resolution, cells, resolution, max_cells);
+  throw std::length_error(text);
+}
+
+MapFitField::MapFitField(const std::vector<Vec2>& points, double max_range, double fit_distance, double resolution,
+                         size_t max_cells)
     : max_range_(max_range), resolution_(resolution) {
   if (points.empty()) return;
   Vec2 lo = points.front(), hi = points.front();
@@ -43,8 +55,10 @@ MapFitField::MapFitField(const std::vector<Vec2>& points, double max_range, doub
   }
   const double margin = fit_distance + resolution;
   origin_ = lo - Vec2(margin, margin);
-  width_ = static_cast<size_t>(std::ceil((hi.x() - lo.x() + 2 * margin) / resolution)) + 1;
-  height_ = static_cast<size_t>(std::ceil((hi.y() - lo.y() + 2 * margin) / resolution)) + 1;
+  const Vec2 cells_wide = ((hi - lo).array() + 2 * margin).matrix() / resolution;
+  requireGridWithin(cells_wide, resolution, max_cells, "the map fit field");
+  width_ = static_cast<size_t>(std::ceil(cells_wide.x())) + 1;
+  height_ = static_cast<size_t>(std::ceil(cells_wide.y())) + 1;
   near_.assign(width_ * height_, 0);
   const int reach = static_cast<int>(std::ceil(fit_distance / resolution));
   const double reach2 = (fit_distance / resolution) * (fit_distance / resolution);

@@ -18,14 +18,22 @@ namespace polarslam {
 /// in the map frame (non-finite ones left out).
 std::vector<Vec2> mapEndpoints(const std::vector<LaserScan>& scans, const std::vector<Pose2>& poses, double max_range);
 
+/// Throws std::length_error, naming `what`, when a grid `cells_wide` cells across (x, y, before
+/// rounding up) at `resolution` m per cell would hold more than `max_cells` (or is not finite):
+/// a map that spreads that far is refused rather than exhausting memory.
+void requireGridWithin(const Vec2& cells_wide, double resolution, size_t max_cells, const char* what);
+
 class MapFitField {
  public:
   /// `scans[i]` taken from robot pose `poses[i]` (map frame); readings beyond `max_range` are
   /// left out. `resolution` in m per cell.
   MapFitField(const std::vector<LaserScan>& scans, const std::vector<Pose2>& poses, double max_range,
               double fit_distance, double resolution = 0.05);
-  /// The same from the map's points (mapEndpoints of its scans within `max_range`).
-  MapFitField(const std::vector<Vec2>& points, double max_range, double fit_distance, double resolution = 0.05);
+  /// The same from the map's points (mapEndpoints of its scans within `max_range`). Throws
+  /// std::length_error when the grid would hold more than `max_cells` (one byte each; the
+  /// default: 410 m × 410 m at 5 cm).
+  MapFitField(const std::vector<Vec2>& points, double max_range, double fit_distance, double resolution = 0.05,
+              size_t max_cells = size_t{1} << 26);
 
   /// Fraction of `scan`'s readings within max_range whose endpoint, with the robot at `pose`,
   /// lies within fit_distance of the map; 0 for a scan with none.

@@ -87,7 +87,8 @@ struct MapLocalizerStats {
 
 class MapLocalizer {
  public:
-  /// Throws std::invalid_argument when no reference scan is usable.
+  /// Throws std::invalid_argument when no reference scan is usable, std::length_error when the map
+  /// spreads too far for the global search's grids (CorrelativeSearchParams::max_cells).
   MapLocalizer(const std::vector<MapReference>& references, PsmSlamParams params);
 
   /// A known start: tracking begins at `pose` (map frame) with covariance `cov`.

@@ -121,6 +121,24 @@ TEST(MapLocalizer, FindsAnUnknownStartAndThenTracksTheMap) {
   EXPECT_EQ(loc.stats.losses, 0u);
 }
 
+// A map whose grids would not fit in memory (one reference scan 100 km off, a corrupted pose that
+// passed its checksum, or a campus far wider than 410 m) is refused at once with a clear error,
+// rather than allocating gigabytes or hanging.
+TEST(MapLocalizer, AMapTooWideForItsGridsIsRefusedWithAClearError) {
+  const std::vector<MapReference> map = mapOfOneLap();
+  for (const double x : {1e5, 1e12, 1e300}) {
+    std::vector<MapReference> spread = map;
+    spread[3].pose.x = x;
+    try {
+      MapLocalizer localizer(spread, testConfig().slam);
+      ADD_FAILURE() << "a map reaching x = " << x << " m was accepted";
+    } catch (const std::length_error& e) {
+      EXPECT_NE(std::string(e.what()).find("more than max_cells"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("the map spans"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(MapLocalizer, AKnownStartTracksFromTheFirstScanWithoutSearching) {
   const std::vector<MapReference> map = mapOfOneLap();
   const std::vector<Pose2> path = loopPathInWorld(1);

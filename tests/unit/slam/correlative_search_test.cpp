@@ -230,6 +230,14 @@ TEST(CorrelativeMapSearch, ABestPlaceThresholdFindsTheSamePlacesOrNone) {
   EXPECT_LE(two.scored_nodes, all.scored_nodes);
 }
 
+TEST(CorrelativeMapSearch, AGridBeyondMaxCellsIsRefused) {
+  const std::vector<Vec2> map = pointsOf({{{0, 0}, {5, 0}}, {{5, 0}, {5, 3}}}, 0.05);
+  CorrelativeSearchParams params{0.1, 0.1, 0.8, 4};
+  EXPECT_NO_THROW(CorrelativeMapSearch(map, {{2.5, 1.5}}, params));
+  params.max_cells = 1000;  // the map and its margins span about 80 × 60 cells at 0.1 m
+  EXPECT_THROW(CorrelativeMapSearch(map, {{2.5, 1.5}}, params), std::length_error);
+}
+
 TEST(CorrelativeMapSearch, NothingToSearchFindsNothing) {
   const CorrelativeMapSearch empty_map({}, {{0.0, 0.0}}, CorrelativeSearchParams{});
   EXPECT_TRUE(empty_map.find({{1.0, 0.0}}, CorrelativeQuery{}).places.empty());
