@@ -353,10 +353,16 @@ std::vector<PsmSlam::Candidate> PsmSlam::referenceCandidates() const {
     // Only keyframes that could become the reference again, or old ones (loop closures), are
     // worth a match: the recent chain is already tied to the active keyframe.
     const bool old = isOld(id);
-    const RelativePosePrediction p = filter_.predictRelative(id);
-    const double distance = p.mean.translation().norm();
     const double radius = old ? params_.loop_search_radius : reuse_distance;
     const double max_heading = old ? params_.loop_max_heading_difference : reuse_angle;
+    // Most keyframes are far beyond any doubt: ruled out on bounds of their spread, the same
+    // decision the covariance below would give, without computing it.
+    const RelativePoseBound bound = filter_.boundRelative(id);
+    const double far_by = std::max(0.0, bound.mean.translation().norm() - radius);
+    const double turned_by = std::max(0.0, std::abs(bound.mean.theta) - max_heading);
+    if (far_by > k * bound.position_sigma || turned_by > k * bound.heading_sigma) continue;
+    const RelativePosePrediction p = filter_.predictRelative(id);
+    const double distance = p.mean.translation().norm();
     // Mahalanobis neighbourhood: the robot may be within `radius` of the keyframe if the
     // shortfall along the line to it is within k standard deviations.
     const double shortfall = std::max(0.0, distance - radius);

@@ -247,6 +247,21 @@ RelativePosePrediction PsmSlamFilter::predictRelative(int64_t id) const {
   return prediction;
 }
 
+// Along the direction u of the relative translation t = R_kᵀ(t_r − t_k), the keyframe's heading
+// moves t across u only, so var(uᵀt) = var(uᵀR_kᵀ(t_r − t_k)), at most (σ_r + σ_k)² with σ² the
+// trace of each position covariance (Cauchy–Schwarz on the cross term). The keyframe's stored
+// block bounds its covariance: the pending updates only subtract from it (keyframeCovariance).
+RelativePoseBound PsmSlamFilter::boundRelative(int64_t id) const {
+  const size_t slot = slotOf(id);
+  const Mat3 P_rr = robotCovariance();
+  const Mat3 P_kk = slot == active_slot_ ? Mat3(local_P_.bottomRightCorner<3, 3>()) : block(offset(slot), offset(slot));
+  RelativePoseBound bound;
+  bound.mean = between(keyframePose(id), robotPose());
+  bound.position_sigma = std::sqrt(std::max(0.0, P_rr(0, 0) + P_rr(1, 1))) + std::sqrt(std::max(0.0, P_kk(0, 0) + P_kk(1, 1)));
+  bound.heading_sigma = std::sqrt(std::max(0.0, P_rr(2, 2))) + std::sqrt(std::max(0.0, P_kk(2, 2)));
+  return bound;
+}
+
 FilterUpdateOutcome PsmSlamFilter::update(int64_t id, const Pose2& z, const Mat3& R, double chi2_gate) {
   setActiveKeyframe(id);
   const Pose2 robot = robotPose(), keyframe(local_x_.tail<3>());

@@ -29,6 +29,14 @@ struct RelativePosePrediction {
   Mat3 cov = Mat3::Zero();
 };
 
+/// v(⊖k ⊕ r) as predictRelative gives it, with bounds on its standard deviations that need no
+/// covariance product: along any direction of its translation, and of its heading.
+struct RelativePoseBound {
+  Pose2 mean;
+  double position_sigma = 0.0;  ///< m, ≥ √(uᵀ·cov_xy·u) for the direction u of mean's translation
+  double heading_sigma = 0.0;   ///< rad, ≥ √cov(2, 2)
+};
+
 struct FilterUpdateOutcome {
   bool accepted = false;
   double chi2 = 0.0;  ///< νᵀS⁻¹ν of the innovation (3 degrees of freedom)
@@ -69,6 +77,8 @@ class PsmSlamFilter {
 
   /// v(⊖k ⊕ r) and its covariance J·P·Jᵀ, without the measurement noise. O(1) for any keyframe.
   RelativePosePrediction predictRelative(int64_t id) const;
+  /// The same mean with bounds on its spread, for ruling keyframes out before predictRelative.
+  RelativePoseBound boundRelative(int64_t id) const;
   /// EKF update with a measurement z of v(⊖k ⊕ r) with covariance R. The update is applied only
   /// when νᵀS⁻¹ν ≤ chi2_gate (pass +inf to always apply it).
   FilterUpdateOutcome update(int64_t id, const Pose2& z, const Mat3& R, double chi2_gate);
