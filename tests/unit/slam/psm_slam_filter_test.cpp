@@ -185,6 +185,40 @@ TEST(PsmSlamFilter, RelativePredictionMatchesTheDenseCovariance) {
   EXPECT_LT((p.mean.vec() - between(k1, r).vec()).norm(), 1e-9);
 }
 
+// boundRelative's spreads bound predictRelative's along the relative translation and in heading,
+// for every keyframe, the active one and ones with pending (compressed) updates included.
+TEST(PsmSlamFilter, RelativeBoundsHoldTheRelativeCovariance) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> step(-0.3, 1.0), turn(-0.6, 0.6), log_noise(-9.0, -3.0);
+  PsmSlamFilter filter;
+  filter.reset(Pose2(), diag3(1e-4, 2e-4, 1e-5));
+  int checked = 0;
+  for (int k = 0; k < 12; ++k) {
+    filter.addKeyframe(k);
+    for (int i = 0; i < 3; ++i) {
+      filter.predict(Pose2(step(rng), 0.3 * step(rng), turn(rng)),
+                     diag3(std::exp(log_noise(rng)), std::exp(log_noise(rng)), std::exp(log_noise(rng))));
+      if (k > 2 && i == 1) {  // a match with an older keyframe leaves updates pending for the rest
+        const int64_t old = k - 3;
+        filter.update(old, filter.predictRelative(old).mean * Pose2(0.01, -0.02, 0.01), diag3(1e-4, 1e-4, 1e-5), 1e9);
+      }
+      for (int64_t id = 0; id <= k; ++id) {
+        const RelativePosePrediction p = filter.predictRelative(id);
+        const RelativePoseBound b = filter.boundRelative(id);
+        EXPECT_EQ(b.mean.vec(), p.mean.vec()) << "keyframe " << id;
+        const double distance = p.mean.translation().norm();
+        if (distance > 1e-9) {
+          const Vec2 u = p.mean.translation() / distance;
+          EXPECT_LE(u.dot(p.cov.topLeftCorner<2, 2>() * u), b.position_sigma * b.position_sigma * (1.0 + 1e-9)) << "keyframe " << id;
+        }
+        EXPECT_LE(p.cov(2, 2), b.heading_sigma * b.heading_sigma * (1.0 + 1e-9)) << "keyframe " << id;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 200);
+}
+
 /// Drives around a square with noisy odometry; keyframes every few steps, matches to the
 /// active keyframe drawn from the true relative pose; at the end a match with keyframe 0.
 struct LoopOutcome {
