@@ -182,7 +182,11 @@ PoseGraph parseGraph(const std::string& text, const std::string& file) {
       node.pose = in.pose("pose");
       in.expectEnd();
       if (graph.indexOf(node.id) >= 0) in.fail("node " + std::to_string(node.id) + " listed twice");
-      graph.addNode(node);
+      try {
+        graph.addNode(node);  // ids must increase
+      } catch (const std::invalid_argument& e) {
+        in.fail(e.what());
+      }
       return;
     }
     if (tag != "edge") in.fail("unknown record '" + std::string(tag) + "'");

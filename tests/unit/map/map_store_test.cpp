@@ -276,6 +276,18 @@ TEST_F(MapStore, RefusesAWellChecksummedButMalformedRecordNamingTheLine) {
   EXPECT_NE(error.find("graph.txt:"), std::string::npos) << error;
 }
 
+// Found by fuzzing (tests/fuzz/map.cpp): node ids out of order threw the pose graph's
+// std::invalid_argument, which named no file.
+TEST_F(MapStore, NodeIdsOutOfOrderAreRefusedNamingTheLine) {
+  StoredMap map = testMap();
+  saveMap(dir_, map);
+  const std::string graph = readTextFile(dir_ + "/graph.txt") + "node -5 0 1 2 0.5\n";
+  rewriteFitting("graph.txt", graph, readTextFile(dir_ + "/manifest.json"));
+  const std::string error = loadError();
+  EXPECT_NE(error.find("graph.txt:"), std::string::npos) << error;
+  EXPECT_NE(error.find("must increase"), std::string::npos) << error;
+}
+
 TEST_F(MapStore, TheNodesUncertaintyAndASnapshotsStateRoundTripAndABadCovarianceIsRefused) {
   StoredMap map = testMap();
   map.node_covariances = {{map.graph.nodes().front().id, Vec3(1e-4, 2e-4, 1e-5).asDiagonal()},
