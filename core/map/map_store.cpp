@@ -492,7 +492,11 @@ StoredMap loadMap(const std::string& dir, const std::optional<LaserGeometry>& ex
   try {
     files = manifest.at("files");
     map.laser = laserFromJson(manifest.at("laser"));
-    for (const auto& [name, entry] : files.items()) readCheckedFile(dir, files, name);
+    for (const auto& [name, entry] : files.items()) {
+      if (name.empty() || name == "." || name == ".." || name.find_first_of("/\\") != std::string::npos)
+        throw MapFormatError(manifest_path, "'" + manifest_path + "' lists '" + name + "', not a file of the map folder");
+      readCheckedFile(dir, files, name);
+    }
   } catch (const nlohmann::json::exception& e) {
     throw MapFormatError(manifest_path, "'" + manifest_path + "' is incomplete: " + e.what());
   } catch (const std::runtime_error& e) {

@@ -288,6 +288,18 @@ TEST_F(MapStore, NodeIdsOutOfOrderAreRefusedNamingTheLine) {
   EXPECT_NE(error.find("must increase"), std::string::npos) << error;
 }
 
+// The manifest names files of the map folder only: loading never reads outside it.
+TEST_F(MapStore, AManifestListingAFileOutsideTheFolderIsRefused) {
+  StoredMap map = testMap();
+  saveMap(dir_, map);
+  const std::string outside = (root_ / "outside.txt").string();
+  std::ofstream(outside) << "not the map's\n";
+  rewriteFitting("../outside.txt", "not the map's\n", readTextFile(dir_ + "/manifest.json"));
+  const std::string error = loadError();
+  EXPECT_NE(error.find("manifest.json"), std::string::npos) << error;
+  EXPECT_NE(error.find("not a file of the map folder"), std::string::npos) << error;
+}
+
 TEST_F(MapStore, TheNodesUncertaintyAndASnapshotsStateRoundTripAndABadCovarianceIsRefused) {
   StoredMap map = testMap();
   map.node_covariances = {{map.graph.nodes().front().id, Vec3(1e-4, 2e-4, 1e-5).asDiagonal()},
