@@ -1,7 +1,5 @@
 #include "slam/correlative_search.hpp"
 
-#include "slam/map_fit_field.hpp"
-
 #include <algorithm>
 #include <bit>
 #include <cmath>

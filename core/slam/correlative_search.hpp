@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "geometry/pose2.hpp"
+#include "slam/map_fit_field.hpp"
 
 namespace polarslam {
 
@@ -36,9 +37,9 @@ struct CorrelativeSearchParams {
   double sigma = 0.1;          ///< m: the likelihood field's spread
   double region_radius = 1.5;  ///< m: robot positions searched around each reference pose
   int levels = 8;              ///< precomputed grids; the coarsest node spans 2^(levels-1) cells
-  /// Largest grid, in cells of `resolution` (the default: 410 m × 410 m at 5 cm; each cell takes
-  /// 2 · levels + 1 bytes once built): a map spreading wider is refused (std::length_error).
-  size_t max_cells = size_t{1} << 26;
+  /// Largest grid, in cells of `resolution` (each cell takes 2 · levels + 1 bytes once built): a
+  /// map spreading wider is refused (std::length_error).
+  size_t max_cells = kMaxMapGridCells;
 };
 
 struct CorrelativeHit {

@@ -22,6 +22,8 @@ std::vector<Vec2> mapEndpoints(const std::vector<LaserScan>& scans, const std::v
 /// rounding up) at `resolution` m per cell would hold more than `max_cells` (or is not finite):
 /// a map that spreads that far is refused rather than exhausting memory.
 void requireGridWithin(const Vec2& cells_wide, double resolution, size_t max_cells, const char* what);
+/// The localiser's grids' default limit: 410 m × 410 m at 5 cm.
+inline constexpr size_t kMaxMapGridCells = size_t{1} << 26;
 
 class MapFitField {
  public:
@@ -30,10 +32,9 @@ class MapFitField {
   MapFitField(const std::vector<LaserScan>& scans, const std::vector<Pose2>& poses, double max_range,
               double fit_distance, double resolution = 0.05);
   /// The same from the map's points (mapEndpoints of its scans within `max_range`). Throws
-  /// std::length_error when the grid would hold more than `max_cells` (one byte each; the
-  /// default: 410 m × 410 m at 5 cm).
+  /// std::length_error when the grid would hold more than `max_cells` (one byte each).
   MapFitField(const std::vector<Vec2>& points, double max_range, double fit_distance, double resolution = 0.05,
-              size_t max_cells = size_t{1} << 26);
+              size_t max_cells = kMaxMapGridCells);
 
   /// Fraction of `scan`'s readings within max_range whose endpoint, with the robot at `pose`,
   /// lies within fit_distance of the map; 0 for a scan with none.
