@@ -15,10 +15,9 @@ namespace {
 constexpr double kScoreScale = 255.0;
 
 /// Level k from level k − 1: the maximum over the 2 × 2 windows of 2^(k−1) cells from each cell,
-/// taken along rows, then along columns (cells beyond the grid count as 0).
-std::vector<uint8_t> poolMax(const std::vector<uint8_t>& finer, int width, int height, int half) {
+/// taken along rows (into `rows`, a cell each), then along columns (cells beyond the grid count as 0).
+void poolMax(const uint8_t* finer, uint8_t* coarser, uint8_t* rows, int width, int height, int half) {
   const size_t w = static_cast<size_t>(width), h = static_cast<size_t>(height), step = static_cast<size_t>(half);
-  std::vector<uint8_t> rows(finer.size()), coarser(finer.size());
   for (size_t y = 0; y < h; ++y) {
     const uint8_t* in = &finer[y * w];
     uint8_t* out = &rows[y * w];
@@ -33,8 +32,7 @@ std::vector<uint8_t> poolMax(const std::vector<uint8_t>& finer, int width, int h
     uint8_t* out = &coarser[y * w];
     for (size_t x = 0; x < w; ++x) out[x] = std::max(a[x], b[x]);
   }
-  std::copy(rows.begin() + static_cast<long>(inside * w), rows.end(), coarser.begin() + static_cast<long>(inside * w));
-  return coarser;
+  std::copy(rows + inside * w, rows + h * w, coarser + inside * w);
 }
 
 /// Items by an integer key in [min_key, max_key], highest first: a bucket per key, so that adding one
@@ -114,51 +112,84 @@ CorrelativeMapSearch::CorrelativeMapSearch(const std::vector<Vec2>& map_points,
   height_ = static_cast<int>(std::ceil(cells_wide.y())) + 1;
   const size_t cells = static_cast<size_t>(width_) * static_cast<size_t>(height_);
 
-  // Both rasters are a value per cell by its distance to the nearest of a set of points: the score
-  // grid exp(-d²/2σ²) out to 3σ, the region the reference positions' discs. The value is looked up
-  // by d², finely binned; the table falls with d², so the nearest point gives the largest value.
-  // Each point stamps its d² on the cells of its disc (a minimum, in a loop the compiler
-  // vectorises), then each cell takes its value once.
-  constexpr int kBins = 4096;
-  auto raster = [&](const std::vector<Vec2>& centres, double radius, const std::vector<uint8_t>& value_by_d2) {
-    const double r2 = (radius / res) * (radius / res), bins_per_d2 = (kBins - 1) / r2;
+  // Both rasters go by a cell's distance d to the nearest of a set of points (its centre to the
+  // point): the score grid is exp(-d²/2σ²) out to 3σ, the region the reference positions' discs.
+  // Each point visits the cells of its disc's bounding box, in loops the compiler vectorises.
+  const auto stamp = [&](const std::vector<Vec2>& centres, double radius, auto&& visit_row) {
+    const double r2 = (radius / res) * (radius / res);
     const int reach = static_cast<int>(std::ceil(radius / res)) + 1;
-    std::vector<double> nearest_d2(cells, std::numeric_limits<double>::infinity());
     for (const Vec2& p : centres) {
       const double cx = (p.x() - origin_.x()) / res, cy = (p.y() - origin_.y()) / res;
       const int x0 = std::max(0, static_cast<int>(cx) - reach), x1 = std::min(width_ - 1, static_cast<int>(cx) + reach);
       const int y0 = std::max(0, static_cast<int>(cy) - reach), y1 = std::min(height_ - 1, static_cast<int>(cy) + reach);
-      for (int y = y0; y <= y1; ++y) {
-        const double ey = y + 0.5 - cy;
-        double* row = &nearest_d2[static_cast<size_t>(y) * static_cast<size_t>(width_)];
-        for (int x = x0; x <= x1; ++x) {
-          const double ex = x + 0.5 - cx;
-          row[x] = std::min(row[x], ex * ex + ey * ey);
-        }
-      }
+      for (int y = y0; y <= y1; ++y) visit_row(static_cast<size_t>(y) * static_cast<size_t>(width_), x0, x1, y + 0.5 - cy, cx, r2);
     }
-    std::vector<uint8_t> grid(cells, 0);
-    for (size_t c = 0; c < cells; ++c)
-      if (nearest_d2[c] <= r2) grid[c] = value_by_d2[static_cast<size_t>(nearest_d2[c] * bins_per_d2)];
-    return grid;
   };
+  // The score is looked up by d², finely binned: the table falls with d², so the nearest point
+  // gives the largest value. Each point stamps its d² on the cells within 3σ (a minimum), then each
+  // cell takes its value once.
+  constexpr int kBins = 4096;
   const double sigma = params_.sigma, score_radius = 3.0 * sigma;
-  std::vector<uint8_t> likelihood(kBins), inside(kBins, 1);
+  std::vector<uint8_t> likelihood(kBins);
   for (int i = 0; i < kBins; ++i) {
     const double d2 = score_radius * score_radius * i / (kBins - 1);  // in m²
     likelihood[static_cast<size_t>(i)] = static_cast<uint8_t>(std::lround(kScoreScale * std::exp(-0.5 * d2 / (sigma * sigma))));
   }
-  std::vector<uint8_t> score = raster(finite_points, score_radius, likelihood);
+  LargePageVector<double> nearest_d2(cells, std::numeric_limits<double>::infinity());
+  stamp(finite_points, score_radius, [&](size_t row_start, int x0, int x1, double ey, double cx, double) {
+    double* row = &nearest_d2[row_start];
+    for (int x = x0; x <= x1; ++x) {
+      const double ex = x + 0.5 - cx;
+      row[x] = std::min(row[x], ex * ex + ey * ey);
+    }
+  });
+  // One score level more than nodes have: a node's headings widen the window its bound needs.
+  cells_ = cells;
+  score_levels_ = params_.levels + 1;
+  grids_.assign(cells * static_cast<size_t>(score_levels_), 0);
+  uint8_t* score = grids_.data();
+  const double score_r2 = (score_radius / res) * (score_radius / res), bins_per_d2 = (kBins - 1) / score_r2;
+  for (size_t c = 0; c < cells; ++c)
+    if (nearest_d2[c] <= score_r2) score[c] = likelihood[static_cast<size_t>(nearest_d2[c] * bins_per_d2)];
+  nearest_d2 = {};
+  LargePageVector<uint8_t> rows(cells);
+  for (int k = 1; k < score_levels_; ++k)
+    poolMax(scoreLevel(k - 1), &grids_[static_cast<size_t>(k) * cells], rows.data(), width_, height_, 1 << (k - 1));
+
   // A robot position is a cell corner (origin + cell · resolution): shift by half a cell.
   std::vector<Vec2> shifted_references;
   for (const Vec2& p : finite_references) shifted_references.push_back(p + Vec2(0.5 * res, 0.5 * res));
-  std::vector<uint8_t> region = raster(shifted_references, params_.region_radius, inside);
-  levels_.push_back(std::move(score));
-  region_.push_back(std::move(region));
-  // One score level more than nodes have: a node's headings widen the window its bound needs.
-  for (int k = 1; k <= params_.levels; ++k) {
-    levels_.push_back(poolMax(levels_.back(), width_, height_, 1 << (k - 1)));
-    if (k < params_.levels) region_.push_back(poolMax(region_.back(), width_, height_, 1 << (k - 1)));
+  LargePageVector<uint8_t> region(cells, 0);
+  stamp(shifted_references, params_.region_radius, [&](size_t row_start, int x0, int x1, double ey, double cx, double r2) {
+    uint8_t* row = &region[row_start];
+    for (int x = x0; x <= x1; ++x) {
+      const double ex = x + 0.5 - cx;
+      row[x] |= static_cast<uint8_t>(ex * ex + ey * ey <= r2);
+    }
+  });
+  buildRegionLevels(std::move(region));
+}
+
+void CorrelativeMapSearch::buildRegionLevels(LargePageVector<uint8_t> region) {
+  // Level k holds a bit per block of 2^k × 2^k cells (a node's translations: nodes of level k start
+  // at multiples of 2^k), set where any cell of the block is in the region.
+  int width = width_, height = height_;
+  for (int k = 0; k < params_.levels; ++k) {
+    if (k > 0) {
+      const int coarser_width = (width + 1) / 2, coarser_height = (height + 1) / 2;
+      LargePageVector<uint8_t> coarser(static_cast<size_t>(coarser_width) * static_cast<size_t>(coarser_height), 0);
+      for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+          coarser[static_cast<size_t>(y / 2) * static_cast<size_t>(coarser_width) + static_cast<size_t>(x / 2)] |=
+              region[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)];
+      region = std::move(coarser);
+      width = coarser_width;
+      height = coarser_height;
+    }
+    RegionLevel bits{width, height, std::vector<uint64_t>((static_cast<size_t>(width) * static_cast<size_t>(height) + 63) / 64, 0)};
+    for (size_t c = 0; c < static_cast<size_t>(width) * static_cast<size_t>(height); ++c)
+      bits.bits[c / 64] |= uint64_t{region[c] != 0} << (c % 64);
+    region_.push_back(std::move(bits));
   }
 }
 
@@ -169,12 +200,12 @@ int CorrelativeMapSearch::cellValue(int level, int x, int y) const {
   if (x <= -window || y <= -window || x >= width_ || y >= height_) return 0;
   x = std::max(x, 0);
   y = std::max(y, 0);
-  return levels_[static_cast<size_t>(level)][static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
+  return scoreLevel(level)[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
 }
 
 bool CorrelativeMapSearch::regionAllows(int level, int x, int y) const {
   if (x < 0 || y < 0 || x >= width_ || y >= height_) return false;
-  return region_[static_cast<size_t>(level)][static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)] != 0;
+  return region_[static_cast<size_t>(level)].allows(x >> level, y >> level);
 }
 
 int CorrelativeMapSearch::nodeSum(const HeadingGroups& groups, int group_index, int level, int x, int y,
@@ -186,7 +217,7 @@ int CorrelativeMapSearch::nodeSum(const HeadingGroups& groups, int group_index, 
   while ((1 << window_level) < (1 << level) + group.extent) ++window_level;
   const int scale = static_cast<int>(kScoreScale);
   const size_t n = groups.points, begin = static_cast<size_t>(group_index) * n;
-  if (window_level >= static_cast<int>(levels_.size())) return scale * static_cast<int>(n);
+  if (window_level >= score_levels_) return scale * static_cast<int>(n);
   // Most nodes scored are pruned: once the points so far fall short of a perfect score by more
   // than max_deficit, the sum so far plus a perfect score for the rest is returned (a bound, below
   // what the node needs, as the whole is).
@@ -195,7 +226,7 @@ int CorrelativeMapSearch::nodeSum(const HeadingGroups& groups, int group_index, 
   if (x + group.min_dx >= 0 && y + group.min_dy >= 0 && x + group.max_dx < width_ && y + group.max_dy < height_) {
     // Every point lands in the grid (the usual case): no clamping.
     const uint8_t* base =
-        &levels_[static_cast<size_t>(window_level)][static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
+        scoreLevel(window_level) + static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
     const std::ptrdiff_t* offsets = &groups.offsets[begin];
     size_t i = 0;
     for (; i + kBatch <= n; i += kBatch) {
@@ -298,7 +329,7 @@ CorrelativeMapSearch::HeadingGroups CorrelativeMapSearch::headingGroups(const st
 
 CorrelativeSearchResult CorrelativeMapSearch::find(const std::vector<Vec2>& points, const CorrelativeQuery& query) const {
   CorrelativeSearchResult result;
-  if (levels_.empty()) return result;
+  if (score_levels_ == 0) return result;
   // A point farther than the grid is wide cannot land on the map from any searched position.
   const double max_reach = params_.resolution * std::hypot(width_, height_);
   double reach = 0.0;
@@ -411,7 +442,7 @@ CorrelativeHit CorrelativeMapSearch::refine(const std::vector<Vec2>& points, con
       finite.push_back(p);
       reach = std::max(reach, p.norm());
     }
-  if (levels_.empty() || finite.empty()) return best;
+  if (score_levels_ == 0 || finite.empty()) return best;
   const double res = params_.resolution, step = headingStep(reach), scale = kScoreScale * static_cast<double>(points.size());
   const int cells = static_cast<int>(std::ceil(std::max(0.0, translation) / res));
   const int turns = std::min(static_cast<int>(std::ceil(std::max(0.0, rotation) / step)), 10000);
@@ -433,7 +464,7 @@ CorrelativeHit CorrelativeMapSearch::refine(const std::vector<Vec2>& points, con
       for (int i = -cells; i <= cells; ++i) {
         int sum = 0;
         if (inside) {
-          const uint8_t* base = &levels_[0][0] + static_cast<std::ptrdiff_t>(j) * width_ + i;
+          const uint8_t* base = scoreLevel(0) + static_cast<std::ptrdiff_t>(j) * width_ + i;
           for (const std::ptrdiff_t offset : offsets) sum += base[offset];
         } else {
           for (size_t k = 0; k < finite.size(); ++k) sum += cellValue(0, cx[k] + i, cy[k] + j);
@@ -445,7 +476,7 @@ CorrelativeHit CorrelativeMapSearch::refine(const std::vector<Vec2>& points, con
 }
 
 double CorrelativeMapSearch::score(const std::vector<Vec2>& points, const Pose2& pose) const {
-  if (levels_.empty() || points.empty()) return 0.0;
+  if (score_levels_ == 0 || points.empty()) return 0.0;
   const double c = std::cos(pose.theta), s = std::sin(pose.theta), res = params_.resolution;
   int sum = 0;
   for (const Vec2& p : points) {

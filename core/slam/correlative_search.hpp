@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "geometry/pose2.hpp"
+#include "slam/large_pages.hpp"
 #include "slam/map_fit_field.hpp"
 
 namespace polarslam {
@@ -134,11 +135,26 @@ class CorrelativeMapSearch {
   double headingStep(double reach) const;
   Pose2 poseOf(int heading, int headings, int x, int y) const;
 
+  /// Bits of a grid of blocks, row by row: a block in the region or not.
+  struct RegionLevel {
+    int width = 0, height = 0;
+    std::vector<uint64_t> bits;
+    size_t index(int x, int y) const { return static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x); }
+    bool allows(int x, int y) const { return (bits[index(x, y) / 64] >> (index(x, y) % 64)) & 1U; }
+  };
+  /// The region's levels from its cells (1 where a translation is allowed), coarsened in place.
+  void buildRegionLevels(LargePageVector<uint8_t> region);
+
   CorrelativeSearchParams params_;
   Vec2 origin_ = Vec2::Zero();
   int width_ = 0, height_ = 0;
-  std::vector<std::vector<uint8_t>> levels_;  ///< [level][y * width + x]: max score over the window
-  std::vector<std::vector<uint8_t>> region_;  ///< [level][y * width + x]: an allowed translation in the window
+  /// The score levels, one after the other: level k's cell y · width + x holds the maximum score
+  /// over the window of 2^k × 2^k cells from there.
+  LargePageVector<uint8_t> grids_;
+  size_t cells_ = 0;
+  int score_levels_ = 0;
+  const uint8_t* scoreLevel(int k) const { return grids_.data() + static_cast<size_t>(k) * cells_; }
+  std::vector<RegionLevel> region_;           ///< [level]: blocks of 2^level cells holding an allowed translation
 };
 
 }  // namespace polarslam
