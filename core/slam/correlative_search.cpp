@@ -211,8 +211,8 @@ bool CorrelativeMapSearch::regionAllows(int level, int x, int y) const {
 int CorrelativeMapSearch::nodeSum(const HeadingGroups& groups, int group_index, int level, int x, int y,
                                   int max_deficit) const {
   const HeadingGroup& group = groups[static_cast<size_t>(group_index)];
-  // The cells a point lands in over the node: its lowest cell plus the translations and the
-  // group's extent. The smallest window holding them all gives the bound.
+  // The cells a point lands in over the node: its lowest cell plus the translations and its
+  // extent. The smallest window holding them gives its bound; the group's extent, every point's.
   int window_level = level;
   while ((1 << window_level) < (1 << level) + group.extent) ++window_level;
   const int scale = static_cast<int>(kScoreScale);
@@ -224,16 +224,24 @@ int CorrelativeMapSearch::nodeSum(const HeadingGroups& groups, int group_index, 
   constexpr size_t kBatch = 8;
   int sum = 0;
   if (x + group.min_dx >= 0 && y + group.min_dy >= 0 && x + group.max_dx < width_ && y + group.max_dy < height_) {
-    // Every point lands in the grid (the usual case): no clamping.
-    const uint8_t* base =
-        scoreLevel(window_level) + static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
+    // Every point lands in the grid (the usual case): no clamping. Each point's own motion over the
+    // group's headings (near points move less than far ones) picks the level its window needs.
+    const size_t at = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
     const std::ptrdiff_t* offsets = &groups.offsets[begin];
+    const int* extents = &groups.extents[begin];
+    const unsigned span = 1U << level;
     size_t i = 0;
     for (; i + kBatch <= n; i += kBatch) {
-      for (size_t k = i; k < i + kBatch; ++k) sum += base[offsets[k]];
+      for (size_t k = i; k < i + kBatch; ++k) {
+        const int point_level = std::bit_width(span + static_cast<unsigned>(extents[k]) - 1U);
+        sum += point_level < score_levels_ ? scoreLevel(point_level)[static_cast<std::ptrdiff_t>(at) + offsets[k]] : scale;
+      }
       if (scale * static_cast<int>(i + kBatch) - sum > max_deficit) return sum + scale * static_cast<int>(n - i - kBatch);
     }
-    for (; i < n; ++i) sum += base[offsets[i]];
+    for (; i < n; ++i) {
+      const int point_level = std::bit_width(span + static_cast<unsigned>(extents[i]) - 1U);
+      sum += point_level < score_levels_ ? scoreLevel(point_level)[static_cast<std::ptrdiff_t>(at) + offsets[i]] : scale;
+    }
   } else {
     const int* dx = &groups.dx[begin];
     const int* dy = &groups.dy[begin];
@@ -269,6 +277,7 @@ CorrelativeMapSearch::HeadingGroups CorrelativeMapSearch::headingGroups(const st
   all.dx.resize(total * n);
   all.dy.resize(total * n);
   all.offsets.resize(total * n);
+  all.extents.assign(total * n, 0);
   const auto finish = [&](size_t g) {
     HeadingGroup& group = all.groups[g];
     const int* dx = &all.dx[g * n];
@@ -314,6 +323,7 @@ CorrelativeMapSearch::HeadingGroups CorrelativeMapSearch::headingGroups(const st
         const int hy = std::max(below_y[ha + i], below_y[hb + i]);
         all.dx[g * n + i] = dx;
         all.dy[g * n + i] = dy;
+        all.extents[g * n + i] = std::max(hx - dx, hy - dy);
         high_x[hp + i] = hx;
         high_y[hp + i] = hy;
         parent.extent = std::max({parent.extent, hx - dx, hy - dy});

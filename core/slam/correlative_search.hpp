@@ -11,8 +11,9 @@
 // 2^k × 2^k cells from there on, so the score of a level-k node (2^k × 2^k translations at one
 // heading) bounds the score of every translation in it: nodes below the best so far are pruned.
 // Headings are branched on too (as translations are): a node also spans a group of headings, over
-// which each point's cell moves within a few cells (the group's extent); the grid of the level whose
-// window holds the translations and that motion bounds the group's scores. Far from the map's
+// which each point's cell moves within a few cells (the point's extent: in proportion to its range);
+// per point, the grid of the level whose window holds the node's translations and that motion
+// bounds its score over the node. Far from the map's
 // look-alikes most of the search space is pruned while whole groups of headings are still one node.
 //
 // The search returns the best pose of each place that scores within `rival_margin` of the best
@@ -102,8 +103,8 @@ class CorrelativeMapSearch {
     int sum = 0;          ///< of the cell values its bound adds up
   };
   /// Headings [first, first + 2^level) of the search, and where each point lands over them: as
-  /// cell offsets from the robot's cell, the lowest of each coordinate, and how far (extent) a
-  /// point's cell moves beyond that as the heading varies over the group.
+  /// cell offsets from the robot's cell, the lowest of each coordinate; `extent` is the farthest
+  /// any point's cell moves beyond that as the heading varies over the group.
   struct HeadingGroup {
     int level = 0;
     int first = 0;
@@ -120,6 +121,7 @@ class CorrelativeMapSearch {
     size_t points = 0;
     std::vector<int> dx, dy;
     std::vector<std::ptrdiff_t> offsets;  ///< dy · width + dx: into a level's cells
+    std::vector<int> extents;             ///< how far each point's cell moves over the group's headings
     const HeadingGroup& operator[](size_t g) const { return groups[g]; }
     size_t size() const { return groups.size(); }
   };
