@@ -211,46 +211,52 @@ bool CorrelativeMapSearch::regionAllows(int level, int x, int y) const {
 int CorrelativeMapSearch::nodeSum(const HeadingGroups& groups, int group_index, int level, int x, int y,
                                   int max_deficit) const {
   const HeadingGroup& group = groups[static_cast<size_t>(group_index)];
-  // The cells a point lands in over the node: its lowest cell plus the translations and its
-  // extent. The smallest window holding them gives its bound; the group's extent, every point's.
-  int window_level = level;
-  while ((1 << window_level) < (1 << level) + group.extent) ++window_level;
   const int scale = static_cast<int>(kScoreScale);
   const size_t n = groups.points, begin = static_cast<size_t>(group_index) * n;
-  if (window_level >= score_levels_) return scale * static_cast<int>(n);
+  const int* extents = &groups.extents[begin];
+  // Over the node, a point lands in the cells from its lowest one to 2^level − 1 + e beyond it on
+  // each axis (the node's translations and its own motion e over the group's headings: a near point
+  // barely moves as the heading turns). The windows of 2^L cells from its lowest cell and from e
+  // cells on cover them, L the least level ≥ level with 2^L ≥ e: its bound is their maximum.
+  const auto window_level = [level](unsigned e) { return std::max(level, static_cast<int>(std::bit_width(e - 1U))); };
   // Most nodes scored are pruned: once the points so far fall short of a perfect score by more
   // than max_deficit, the sum so far plus a perfect score for the rest is returned (a bound, below
   // what the node needs, as the whole is).
-  constexpr size_t kBatch = 8;
-  int sum = 0;
-  if (x + group.min_dx >= 0 && y + group.min_dy >= 0 && x + group.max_dx < width_ && y + group.max_dy < height_) {
-    // Every point lands in the grid (the usual case): no clamping. Each point's own motion over the
-    // group's headings (near points move less than far ones) picks the level its window needs.
-    const size_t at = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
-    const std::ptrdiff_t* offsets = &groups.offsets[begin];
-    const int* extents = &groups.extents[begin];
-    const unsigned span = 1U << level;
+  const auto sum_of = [&](auto&& point_bound) {
+    constexpr size_t kBatch = 8;
+    int sum = 0;
     size_t i = 0;
     for (; i + kBatch <= n; i += kBatch) {
-      for (size_t k = i; k < i + kBatch; ++k) {
-        const int point_level = std::bit_width(span + static_cast<unsigned>(extents[k]) - 1U);
-        sum += point_level < score_levels_ ? scoreLevel(point_level)[static_cast<std::ptrdiff_t>(at) + offsets[k]] : scale;
-      }
+      for (size_t k = i; k < i + kBatch; ++k) sum += point_bound(k);
       if (scale * static_cast<int>(i + kBatch) - sum > max_deficit) return sum + scale * static_cast<int>(n - i - kBatch);
     }
-    for (; i < n; ++i) {
-      const int point_level = std::bit_width(span + static_cast<unsigned>(extents[i]) - 1U);
-      sum += point_level < score_levels_ ? scoreLevel(point_level)[static_cast<std::ptrdiff_t>(at) + offsets[i]] : scale;
-    }
-  } else {
-    const int* dx = &groups.dx[begin];
-    const int* dy = &groups.dy[begin];
-    for (size_t i = 0; i < n; ++i) {
-      sum += cellValue(window_level, x + dx[i], y + dy[i]);
-      if (scale * static_cast<int>(i + 1) - sum > max_deficit) return sum + scale * static_cast<int>(n - i - 1);
-    }
+    for (; i < n; ++i) sum += point_bound(i);
+    return sum;
+  };
+  if (x + group.min_dx >= 0 && y + group.min_dy >= 0 && x + group.max_reach_x < width_ && y + group.max_reach_y < height_) {
+    // Every window starts in the grid (the usual case): no clamping.
+    const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(y) * width_ + x;
+    const std::ptrdiff_t* offsets = &groups.offsets[begin];
+    return sum_of([&](size_t k) {
+      const unsigned e = static_cast<unsigned>(extents[k]);
+      if (e == 0) return static_cast<int>(scoreLevel(level)[at + offsets[k]]);
+      const int point_level = window_level(e);
+      if (point_level >= score_levels_) return scale;
+      const uint8_t* cell = scoreLevel(point_level) + at + offsets[k];
+      const std::ptrdiff_t up = static_cast<std::ptrdiff_t>(e) * width_;
+      return static_cast<int>(std::max({cell[0], cell[e], cell[up], cell[up + e]}));
+    });
   }
-  return sum;
+  const int* dx = &groups.dx[begin];
+  const int* dy = &groups.dy[begin];
+  return sum_of([&](size_t k) {
+    const int e = extents[k], cx = x + dx[k], cy = y + dy[k];
+    if (e == 0) return cellValue(level, cx, cy);
+    const int point_level = window_level(static_cast<unsigned>(e));
+    if (point_level >= score_levels_) return scale;
+    return std::max({cellValue(point_level, cx, cy), cellValue(point_level, cx + e, cy), cellValue(point_level, cx, cy + e),
+                     cellValue(point_level, cx + e, cy + e)});
+  });
 }
 
 // A heading step that moves a point `reach` away by at most one cell (Hess et al., (7)).
@@ -288,6 +294,13 @@ CorrelativeMapSearch::HeadingGroups CorrelativeMapSearch::headingGroups(const st
     group.max_dx = *std::max_element(dx, dx + n);
     group.min_dy = *std::min_element(dy, dy + n);
     group.max_dy = *std::max_element(dy, dy + n);
+    const int* extents = &all.extents[g * n];
+    group.max_reach_x = group.max_dx;
+    group.max_reach_y = group.max_dy;
+    for (size_t i = 0; i < n; ++i) {
+      group.max_reach_x = std::max(group.max_reach_x, dx[i] + extents[i]);
+      group.max_reach_y = std::max(group.max_reach_y, dy[i] + extents[i]);
+    }
   };
   // Per group of the level below and of the one being built, and point: the highest cell over the
   // group's headings (the lowest is dx, dy). A single heading's highest is its own.

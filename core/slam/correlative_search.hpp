@@ -12,8 +12,8 @@
 // heading) bounds the score of every translation in it: nodes below the best so far are pruned.
 // Headings are branched on too (as translations are): a node also spans a group of headings, over
 // which each point's cell moves within a few cells (the point's extent: in proportion to its range);
-// per point, the grid of the level whose window holds the node's translations and that motion
-// bounds its score over the node. Far from the map's
+// per point, the largest of four windows of a level's grid (shifted by that motion) that together
+// hold the node's translations and the motion bounds its score over the node. Far from the map's
 // look-alikes most of the search space is pruned while whole groups of headings are still one node.
 //
 // The search returns the best pose of each place that scores within `rival_margin` of the best
@@ -110,6 +110,7 @@ class CorrelativeMapSearch {
     int first = 0;
     int extent = 0;
     int min_dx = 0, max_dx = 0, min_dy = 0, max_dy = 0;
+    int max_reach_x = 0, max_reach_y = 0;  ///< of a point's lowest cell plus its extent
     int children[2] = {-1, -1};
   };
   /// The groups of every level for a set of points: single headings first (group h is heading h),
