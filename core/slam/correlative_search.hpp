@@ -39,7 +39,7 @@ struct CorrelativeSearchParams {
   double sigma = 0.1;          ///< m: the likelihood field's spread
   double region_radius = 1.5;  ///< m: robot positions searched around each reference pose
   int levels = 8;              ///< precomputed grids; the coarsest node spans 2^(levels-1) cells
-  /// Largest grid, in cells of `resolution` (each cell takes 2 · levels + 1 bytes once built): a
+  /// Largest grid, in cells of `resolution` (each cell takes levels + 1 bytes once built): a
   /// map spreading wider is refused (std::length_error).
   size_t max_cells = kMaxMapGridCells;
 };

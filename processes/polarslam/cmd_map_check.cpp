@@ -1,7 +1,8 @@
 // polarslam map-check M [--log L]: loads a saved map (docs/maps.md) with every check loadMap
 // makes (versions, sizes, CRC32s, records) and prints what it holds; with --log, also refuses a
 // map made with another laser than the log's first scan; a crash-recovery snapshot is also read
-// back as a restart reads it. Exit 1 with the offending file named.
+// back as a restart reads it, and any other map is made ready for localisation as `run --load-map`
+// makes it (a map too wide for the search's grids is refused). Exit 1 with the offending file named.
 #include <chrono>
 #include <iostream>
 #include <optional>
@@ -9,6 +10,7 @@
 #include "command_registry.hpp"
 #include "map/map_store.hpp"
 #include "offline_log.hpp"
+#include "pipeline/psm_slam_estimator.hpp"
 #include "pipeline/psm_slam_session.hpp"
 #include "slam/psm_slam_filter.hpp"
 
@@ -16,7 +18,7 @@ namespace polarslam {
 namespace {
 
 struct MapCheckOptions {
-  std::string map, log;
+  std::string map, log, config;
   SensorChannelNames channels;
 };
 
@@ -53,6 +55,19 @@ void describeSnapshot(const StoredMap& map, const std::string& dir) {
   std::cout << "; resumable\n";
 }
 
+/// Builds what localising in the map or continuing it builds (the global search's grids), with
+/// the parameters of o.config: a map spreading wider than those grids allow is refused here, as
+/// `run --load-map` would refuse it, naming the map and its span.
+void checkLocalisable(const StoredMap& map, const MapCheckOptions& o) {
+  SavedMapOptions saved;
+  saved.load_map = o.map;
+  saved.loaded_map = std::make_shared<const StoredMap>(map);
+  const auto start = std::chrono::steady_clock::now();
+  makePsmSlamEstimator(loadPsmSlamEstimatorConfig(o.config), saved);
+  std::cout << "localisable: the global search's grids built in "
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << " s\n";
+}
+
 void checkMap(const MapCheckOptions& o) {
   const std::optional<LaserGeometry> laser = firstLaserOf(o);
   const auto start = std::chrono::steady_clock::now();
@@ -64,6 +79,7 @@ void checkMap(const MapCheckOptions& o) {
             << " reference scans of " << map.laser.beams << " beams; loaded and checked in " << seconds << " s"
             << (laser ? ", laser matches the log" : "") << "\n";
   if (!map.resume_json.empty()) describeSnapshot(map, o.map);
+  else checkLocalisable(map, o);  // a snapshot resumes its own filter instead
 }
 
 void setupMapCheck(CLI::App& sub) {
@@ -72,6 +88,8 @@ void setupMapCheck(CLI::App& sub) {
   sub.add_option("--log", o->log, "LCM log whose laser the map must fit")->check(CLI::ExistingFile);
   sub.add_option("--laser-channel", o->channels.laser, "channel of the laser scans (laser_scan_t)")
       ->capture_default_str();
+  sub.add_option("--config", o->config, "PSM SLAM parameters localising in the map would use (YAML; default: built in)")
+      ->check(CLI::ExistingFile);
   sub.callback([o] { checkMap(*o); });
 }
 

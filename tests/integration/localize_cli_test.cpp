@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "child_process.hpp"
+#include "map/map_store.hpp"
 
 using namespace std::chrono_literals;
 using polarslam::testing::binPath;
@@ -63,6 +64,18 @@ TEST(LocalizeCli, TheDefaultLogLocalisesInAndContinuesItsOwnSavedMapAndBadOption
   EXPECT_GT(continued["saved_map"]["nodes"].get<int>(), map_nodes);
   EXPECT_EQ(continued["saved_map"]["reference_scans"], continued["saved_map"]["nodes"]);
   ASSERT_EQ(runToEnd({binPath("polarslam"), "map-check", extended}, dir / "check.out", 60s), 0) << readFile(dir / "check.out");
+  EXPECT_NE(readFile(dir / "check.out").find("localisable"), std::string::npos) << readFile(dir / "check.out");
+
+  // A map one of whose nodes lies 100 km away (intact files, fresh checksums) would need search
+  // grids of 10^9 cells: map-check refuses it as run --load-map does, naming the map.
+  polarslam::StoredMap wide = polarslam::loadMap(map);
+  const polarslam::PoseGraphNode far = wide.graph.nodes().at(3);
+  wide.graph.setPose(far.id, polarslam::Pose2(1e5, far.pose.y, far.pose.theta));
+  const std::string wide_map = (dir / "wide").string();
+  polarslam::saveMap(wide_map, wide);
+  EXPECT_NE(runToEnd({binPath("polarslam"), "map-check", wide_map}, dir / "wide.out", 60s), 0) << readFile(dir / "wide.out");
+  EXPECT_NE(readFile(dir / "wide.out").find("the map spans"), std::string::npos) << readFile(dir / "wide.out");
+  EXPECT_NE(readFile(dir / "wide.out").find(wide_map), std::string::npos) << readFile(dir / "wide.out");
 
   const std::vector<std::pair<std::vector<std::string>, std::string>> mistakes{
       {{"--pipeline", "psm-slam", "--load-map", map, "--initial-pose", "1,2"}, "expected x,y,theta"},
