@@ -465,9 +465,16 @@ CorrelativeHit CorrelativeMapSearch::refine(const std::vector<Vec2>& points, con
       finite.push_back(p);
       reach = std::max(reach, p.norm());
     }
-  if (score_levels_ == 0 || finite.empty()) return best;
+  if (score_levels_ == 0 || finite.empty() || !finitePose(pose)) return best;
   const double res = params_.resolution, step = headingStep(reach), scale = kScoreScale * static_cast<double>(points.size());
-  const int cells = static_cast<int>(std::ceil(std::max(0.0, translation) / res));
+  // A pose whose window and points lie wholly off the grid has nothing to refine (and its cells
+  // would not fit an int).
+  const double beyond = reach + std::max(0.0, translation) + res;
+  const Vec2 from_origin = pose.translation() - origin_;
+  if (from_origin.x() < -beyond || from_origin.y() < -beyond || from_origin.x() > width_ * res + beyond ||
+      from_origin.y() > height_ * res + beyond)
+    return best;
+  const int cells = static_cast<int>(std::min(std::ceil(std::max(0.0, translation) / res), static_cast<double>(width_ + height_)));
   const int turns = std::min(static_cast<int>(std::ceil(std::max(0.0, rotation) / step)), 10000);
   // Per heading each point's cell is found once; the translations step it by whole cells.
   std::vector<int> cx(finite.size()), cy(finite.size());

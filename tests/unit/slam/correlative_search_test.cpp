@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -142,6 +143,23 @@ TEST(CorrelativeMapSearch, RefineFindsTheBestScoreOfItsWindowAsScoringEveryPoseD
     EXPECT_NEAR(refined.score, best, 1e-12) << "from " << from.x << ", " << from.y;
     EXPECT_NEAR(search.score(points, refined.pose), refined.score, 1e-12) << "the pose returned has the score returned";
   }
+}
+
+// A pose far off the grid, or not finite, has nothing around it to refine: it comes back as given
+// (a NaN pose's cells were an undefined conversion, found by tests/fuzz/global_search.cpp).
+TEST(CorrelativeMapSearch, RefineOfAPoseOffTheGridOrNotFiniteReturnsItAsGiven) {
+  const LoopMap loop;
+  const CorrelativeMapSearch search(loop.points, loop.positions, CorrelativeSearchParams{});
+  const std::vector<Vec2> points = scanPoints(Pose2(-2.0, -3.0, 0.1), 98);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const Pose2& from : {Pose2(nan, 0.0, 0.0), Pose2(0.0, 0.0, nan), Pose2(1e12, -3.0, 0.1), Pose2(-2.0, -1e300, 0.1)}) {
+    const CorrelativeHit refined = search.refine(points, from, 0.2, 0.05);
+    EXPECT_EQ(refined.score, 0.0);
+    EXPECT_TRUE(refined.pose.x == from.x || (std::isnan(refined.pose.x) && std::isnan(from.x)));
+    EXPECT_TRUE(refined.pose.theta == from.theta || (std::isnan(refined.pose.theta) && std::isnan(from.theta)));
+  }
+  const CorrelativeHit huge_window = search.refine(points, Pose2(-2.0, -3.0, 0.1), 1e300, 0.0);
+  EXPECT_GT(huge_window.score, 0.8) << "a window wider than the grid is the grid";
 }
 
 TEST(CorrelativeMapSearch, ASymmetricMapGivesEveryLookAlikePlace) {
