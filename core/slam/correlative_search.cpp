@@ -291,13 +291,11 @@ CorrelativeMapSearch::HeadingGroups CorrelativeMapSearch::headingGroups(const st
     std::ptrdiff_t* offsets = &all.offsets[g * n];
     for (size_t i = 0; i < n; ++i) offsets[i] = static_cast<std::ptrdiff_t>(dy[i]) * width_ + dx[i];
     group.min_dx = *std::min_element(dx, dx + n);
-    group.max_dx = *std::max_element(dx, dx + n);
     group.min_dy = *std::min_element(dy, dy + n);
-    group.max_dy = *std::max_element(dy, dy + n);
     const int* extents = &all.extents[g * n];
-    group.max_reach_x = group.max_dx;
-    group.max_reach_y = group.max_dy;
-    for (size_t i = 0; i < n; ++i) {
+    group.max_reach_x = dx[0] + extents[0];
+    group.max_reach_y = dy[0] + extents[0];
+    for (size_t i = 1; i < n; ++i) {
       group.max_reach_x = std::max(group.max_reach_x, dx[i] + extents[i]);
       group.max_reach_y = std::max(group.max_reach_y, dy[i] + extents[i]);
     }

@@ -109,8 +109,8 @@ class CorrelativeMapSearch {
     int level = 0;
     int first = 0;
     int extent = 0;
-    int min_dx = 0, max_dx = 0, min_dy = 0, max_dy = 0;
-    int max_reach_x = 0, max_reach_y = 0;  ///< of a point's lowest cell plus its extent
+    int min_dx = 0, min_dy = 0;            ///< the lowest cell offset of any point
+    int max_reach_x = 0, max_reach_y = 0;  ///< the highest of a point's lowest cell plus its extent
     int children[2] = {-1, -1};
   };
   /// The groups of every level for a set of points: single headings first (group h is heading h),
@@ -145,7 +145,8 @@ class CorrelativeMapSearch {
     size_t index(int x, int y) const { return static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x); }
     bool allows(int x, int y) const { return (bits[index(x, y) / 64] >> (index(x, y) % 64)) & 1U; }
   };
-  /// The region's levels from its cells (1 where a translation is allowed), coarsened in place.
+  /// The region's levels from its cells (1 where a translation is allowed), each level from the one
+  /// below.
   void buildRegionLevels(LargePageVector<uint8_t> region);
 
   CorrelativeSearchParams params_;

@@ -58,10 +58,10 @@ void describeSnapshot(const StoredMap& map, const std::string& dir) {
 /// Builds what localising in the map or continuing it builds (the global search's grids), with
 /// the parameters of o.config: a map spreading wider than those grids allow is refused here, as
 /// `run --load-map` would refuse it, naming the map and its span.
-void checkLocalisable(const StoredMap& map, const MapCheckOptions& o) {
+void checkLocalisable(std::shared_ptr<const StoredMap> map, const MapCheckOptions& o) {
   SavedMapOptions saved;
   saved.load_map = o.map;
-  saved.loaded_map = std::make_shared<const StoredMap>(map);
+  saved.loaded_map = std::move(map);
   const auto start = std::chrono::steady_clock::now();
   makePsmSlamEstimator(loadPsmSlamEstimatorConfig(o.config), saved);
   std::cout << "localisable: the global search's grids built in "
@@ -71,7 +71,8 @@ void checkLocalisable(const StoredMap& map, const MapCheckOptions& o) {
 void checkMap(const MapCheckOptions& o) {
   const std::optional<LaserGeometry> laser = firstLaserOf(o);
   const auto start = std::chrono::steady_clock::now();
-  const StoredMap map = loadMap(o.map, laser);
+  auto loaded = std::make_shared<const StoredMap>(loadMap(o.map, laser));
+  const StoredMap& map = *loaded;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cout << "map " << o.map << ": format " << kMapFormatName << " version " << kMapFormatVersion << ", "
             << map.graph.nodes().size() << " nodes, " << map.graph.edges().size() << " edges ("
@@ -79,7 +80,7 @@ void checkMap(const MapCheckOptions& o) {
             << " reference scans of " << map.laser.beams << " beams; loaded and checked in " << seconds << " s"
             << (laser ? ", laser matches the log" : "") << "\n";
   if (!map.resume_json.empty()) describeSnapshot(map, o.map);
-  else checkLocalisable(map, o);  // a snapshot resumes its own filter instead
+  else checkLocalisable(std::move(loaded), o);  // a snapshot resumes its own filter instead
 }
 
 void setupMapCheck(CLI::App& sub) {
