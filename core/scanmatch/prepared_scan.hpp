@@ -14,8 +14,8 @@
 
 namespace polarslam {
 
-/// Lanes of the vectorised projection (SSE: four floats).
-inline constexpr size_t kSimdWidth = 4;
+/// Scans are padded to this many readings for the vectorised projection (AVX2: eight floats).
+inline constexpr size_t kSimdWidth = 8;
 /// A bearing without a reading, in float range arrays.
 inline constexpr float kInfF = std::numeric_limits<float>::infinity();
 

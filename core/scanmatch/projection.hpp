@@ -10,6 +10,7 @@
 #include "geometry/pose2.hpp"
 #include "scanmatch/beam_geometry.hpp"
 #include "scanmatch/prepared_scan.hpp"
+#include "scanmatch/vector_kernels.hpp"
 
 namespace polarslam {
 
@@ -29,5 +30,9 @@ struct Projection {
 /// `ref_geometry`. Samples of surfaces seen from behind hide what lies beyond them and are tagged
 /// kFlagOccluded; bearings no segment covers are kFlagEmpty.
 void projectScan(const BeamGeometry& ref_geometry, const PreparedScan& cur, const Pose2& pose, Projection& out);
+/// The same with the given vector kernels (the baseline where they are not available); the
+/// first form uses the widest the processor has. Each gives the same bits.
+void projectScan(const BeamGeometry& ref_geometry, const PreparedScan& cur, const Pose2& pose, Projection& out,
+                 VectorKernels kernels);
 
 }  // namespace polarslam

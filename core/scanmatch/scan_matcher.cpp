@@ -1,9 +1,12 @@
 #include "scanmatch/scan_matcher.hpp"
 
+#include "scanmatch/joint_sums.hpp"
+
 #include <Eigen/Dense>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
 
@@ -70,20 +73,28 @@ struct ObservableSpace {
   static constexpr double kObservable = 0.02;
   Vec3 scale, values;
   Mat3 vectors;
+  /// Set when bounds on the eigenvalues already show every direction observable (or, for a
+  /// translation-only block, both translations): then A⁻¹ is the plain inverse, with no
+  /// eigen-decomposition (which costs more than the rest of a Gauss–Newton step).
+  bool direct = false;
+  Mat3 balanced_inverse;  ///< the balanced form's inverse when `direct`; 0 in an empty rotation row
   bool observable(int k) const { return values(k) > kObservable * values.maxCoeff(); }
 
   explicit ObservableSpace(const Mat3& information) {
     const double translation = 0.5 * (information(0, 0) + information(1, 1));
     const double rotation = information(2, 2) > 0.0 && translation > 0.0 ? std::sqrt(translation / information(2, 2)) : 1.0;
     scale = Vec3(1.0, 1.0, rotation);
+    const Mat3 balanced = scale.asDiagonal() * information * scale.asDiagonal();
+    if ((direct = clearlyObservable(balanced))) return;
     Eigen::SelfAdjointEigenSolver<Mat3> eigen;
-    eigen.computeDirect(scale.asDiagonal() * information * scale.asDiagonal());
+    eigen.computeDirect(balanced);
     values = eigen.eigenvalues();
     vectors = eigen.eigenvectors();
   }
   /// Gauss–Newton step A⁻¹g along the observable directions only: elsewhere the estimate keeps
   /// its prior instead of sliding along a corridor on noise.
   Vec3 step(const Vec3& gradient) const {
+    if (direct) return scale.cwiseProduct(balanced_inverse * scale.cwiseProduct(gradient));
     const Vec3 projected = vectors.transpose() * scale.cwiseProduct(gradient);
     Vec3 s = Vec3::Zero();
     for (int k = 0; k < 3; ++k)
@@ -92,9 +103,37 @@ struct ObservableSpace {
   }
   /// A⁻¹ with the unobservable directions given `free_variance` (in the balanced units).
   Mat3 inverse(double free_variance) const {
+    if (direct) {
+      Mat3 inverse = balanced_inverse;
+      if (inverse(2, 2) == 0.0) inverse(2, 2) = free_variance;  // a translation-only block
+      return scale.asDiagonal() * inverse * scale.asDiagonal();
+    }
     Vec3 variances;
     for (int k = 0; k < 3; ++k) variances(k) = observable(k) ? 1.0 / values(k) : free_variance;
     return scale.asDiagonal() * vectors * variances.asDiagonal() * vectors.transpose() * scale.asDiagonal();
+  }
+
+ private:
+  /// For a symmetric matrix with trace t > 0, sum of principal 2×2 minors m > 0 and determinant d,
+  /// d > kObservable·t·m means every eigenvalue is positive (the characteristic polynomial's
+  /// signs alternate) and λmin ≥ d/m > kObservable·t ≥ kObservable·λmax. The same with 2×2 when
+  /// the rotation row is empty: λmin ≥ d/t and λmax ≤ t.
+  bool clearlyObservable(const Mat3& a) {
+    const bool translation_only = a(2, 2) == 0.0 && a(0, 2) == 0.0 && a(1, 2) == 0.0;
+    if (translation_only) {
+      const double t = a(0, 0) + a(1, 1), d = a(0, 0) * a(1, 1) - a(0, 1) * a(0, 1);
+      if (!(t > 0.0 && d > kObservable * t * t)) return false;
+      balanced_inverse.setZero();
+      balanced_inverse.topLeftCorner<2, 2>() << a(1, 1) / d, -a(0, 1) / d, -a(0, 1) / d, a(0, 0) / d;
+      return true;
+    }
+    const double t = a.trace();
+    const double m = a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0) + a(0, 0) * a(2, 2) - a(0, 2) * a(2, 0) +
+                     a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1);
+    const double d = a.determinant();
+    if (!(t > 0.0 && m > 0.0 && d > kObservable * t * m)) return false;
+    balanced_inverse = a.inverse();
+    return true;
   }
 };
 
@@ -247,10 +286,34 @@ double shiftCost(const float* p, const float* pm, const float* r, const float* r
   const int count = std::min(n, n - shift) - first;
   overlap = 0;
   if (count <= 0) return kInf;
-  const ArrayMapF pv(p + first, count), pmv(pm + first, count);
-  const ArrayMapF rv(r + first + shift, count), rmv(rm + first + shift, count);
-  const float sum = ((pv - rv).abs().min(truncation) * pmv * rmv).sum();
-  const float pairs = (pmv * rmv).sum();
+  p += first;
+  pm += first;
+  r += first + shift;
+  rm += first + shift;
+  // One pass, four lanes, both sums at once (the pair count is exact in any order).
+  using Floats = float __attribute__((vector_size(16)));
+  auto load = [](const float* at) {
+    Floats v;
+    std::memcpy(&v, at, sizeof(v));
+    return v;
+  };
+  const Floats cap = Floats{} + truncation;
+  Floats sums{}, pair_sums{};
+  int i = 0;
+  for (; i + 4 <= count; i += 4) {
+    const Floats d = load(p + i) - load(r + i);
+    const Floats magnitude = d < 0.0f ? -d : d;
+    const Floats both = load(pm + i) * load(rm + i);
+    sums += (magnitude < cap ? magnitude : cap) * both;
+    pair_sums += both;
+  }
+  float sum = (sums[0] + sums[1]) + (sums[2] + sums[3]);
+  float pairs = (pair_sums[0] + pair_sums[1]) + (pair_sums[2] + pair_sums[3]);
+  for (; i < count; ++i) {
+    const float both = pm[i] * rm[i];
+    sum += std::min(std::abs(p[i] - r[i]), truncation) * both;
+    pairs += both;
+  }
   overlap = static_cast<int>(pairs + 0.5f);
   return overlap > 0 ? static_cast<double>(sum) / pairs : kInf;
 }
@@ -342,23 +405,18 @@ ScanMatcher::OrientationStep ScanMatcher::searchOrientation(const PreparedScan& 
 double ScanMatcher::gradientRefinement(const PreparedScan& ref, int shift, double c) const {
   // Least squares for δ in P_i ≈ R(i + k + δ) ≈ R_{i+k} + δ·R'_{i+k}, robustly weighted.
   const auto n = static_cast<int>(ref.size());
-  double num = 0.0, den = 0.0;
-  for (int i = std::max(0, -shift); i < std::min(n, n - shift); ++i) {
-    const auto j = static_cast<size_t>(i + shift);
-    const float slope = ref.slope[j];
-    if (proj_mask_[static_cast<size_t>(i)] == 0.0f || ref.mask[j] == 0.0f || !std::isfinite(slope)) continue;
-    const double r = static_cast<double>(proj_masked_[static_cast<size_t>(i)]) - ref.range[j];
-    if (std::abs(r) >= params_.max_error) continue;
-    const double w = c / (c + r * r);
-    num += w * slope * r;
-    den += w * static_cast<double>(slope) * slope;
-  }
-  if (!(den > 0.0)) return 0.0;
+  const int first = std::max(0, -shift), end = std::min(n, n - shift);
+  if (end <= first) return 0.0;
+  const auto i = static_cast<size_t>(first), j = static_cast<size_t>(first + shift);
+  const SlopeFitInputs inputs{proj_masked_.data() + i, proj_mask_.data() + i, ref.range.data() + j,
+                              ref.mask.data() + j, ref.slope.data() + j, static_cast<size_t>(end - first),
+                              params_.max_error};
+  const SlopeFitSums sums = sumSlopeFit(inputs, c, kernels_);
+  if (!(sums.den > 0.0)) return 0.0;
   // Beyond one beam the linearisation is poor, but the direction is right: the next
   // orientation step continues from there.
-  return std::clamp(num / den, -1.0, 1.0);
+  return std::clamp(sums.num / sums.den, -1.0, 1.0);
 }
-
 
 namespace {
 
@@ -426,7 +484,7 @@ MatchResult ScanMatcher::matchPsm(const PreparedScan& ref, const PreparedScan& c
   int iteration = 0;
   while (iteration < params_.max_iterations) {
     const bool orientation_step = (params_.order == IterationOrder::OrientationFirst) == (iteration % 2 == 0);
-    projectScan(*ref.geometry, cur, result.pose, projection_);
+    projectScan(*ref.geometry, cur, result.pose, projection_, kernels_);
     if (joint) {
       system = jointSystem(ref, result.pose, params_.late_weighting_factor);
       result.valid_points = system.used;
@@ -472,7 +530,7 @@ MatchResult ScanMatcher::matchPsm(const PreparedScan& ref, const PreparedScan& c
   // The last joint system was set up one (tiny) step before the end; otherwise the final pose
   // gets its own.
   if (!(joint && result.converged)) {
-    projectScan(*ref.geometry, cur, result.pose, projection_);
+    projectScan(*ref.geometry, cur, result.pose, projection_, kernels_);
     system = jointSystem(ref, result.pose, params_.late_weighting_factor);
     result.valid_points = system.used;
     // The alternating steps may have had fewer (stepMinPoints); the answer may not. (A joint
@@ -515,7 +573,7 @@ MatchResult ScanMatcher::matchPsmC(const PreparedScan& ref, const PreparedScan& 
   bool first_orientation = true;
   int iteration = 0;
   while (iteration < params_.max_iterations) {
-    projectScan(*ref.geometry, cur, result.pose, projection_);
+    projectScan(*ref.geometry, cur, result.pose, projection_, kernels_);
     if (iteration % period == orientation_phase) {
       const double window = first_orientation ? std::max(params_.initial_search_window, params_.search_window)
                                               : params_.search_window;
@@ -556,7 +614,7 @@ MatchResult ScanMatcher::matchIcp(const PreparedScan& ref, const PreparedScan& c
     // PSM's projection filters current readings hidden from, or outside the view of, the
     // reference laser; then each survivor is paired with its closest reference point within
     // ±window bearings.
-    projectScan(g, cur, result.pose, projection_);
+    projectScan(g, cur, result.pose, projection_, kernels_);
     icp_cur_.clear();
     icp_ref_.clear();
     icp_dist_.clear();
@@ -623,7 +681,7 @@ MatchResult ScanMatcher::matchIcp(const PreparedScan& ref, const PreparedScan& c
 // Covariance (§11)
 
 void ScanMatcher::estimateCovariance(const PreparedScan& ref, const PreparedScan& cur, MatchResult& result) {
-  projectScan(*ref.geometry, cur, result.pose, projection_);
+  projectScan(*ref.geometry, cur, result.pose, projection_, kernels_);
   fillCovariance(ref, jointSystem(ref, result.pose, params_.late_weighting_factor), result);
 }
 
@@ -653,71 +711,41 @@ Mat3 ScanMatcher::heuristicCovariance(const PreparedScan& ref, double error_inde
 }
 
 ScanMatcher::JointSystem ScanMatcher::jointSystem(const PreparedScan& ref, const Pose2& pose, double c) const {
-  const float* projected = projection_.range.data();
-  const uint8_t* tag = projection_.tag.data();
-  const float* measured = ref.range.data();
-  const uint8_t* flags = ref.flags.data();
   const PreparedScan::SurfaceTerms& surface = ref.surface;
-  const double min_range = params_.min_range, max_range = params_.max_range;
-  const double max_error = params_.max_error, max_slope = params_.max_slope;
-  // The sums in pairs, two lanes of one register each, so that all of them stay in registers
-  // (twelve scalar sums did not: each addition went through the stack). Each lane adds the same
-  // terms in the same order as a scalar sum would.
-  using Pair = double __attribute__((vector_size(16)));
-  Pair a11_a22{0, 0}, a12_a23{0, 0}, a13_a33{0, 0}, g1_g2{0, 0}, g3_w{0, 0};
-  const bool slope_noise = params_.slope_noise_correction;
+  const JointInputs inputs{projection_.range.data(), ref.range.data(), projection_.tag.data(), ref.flags.data(),
+                           surface.rho.data(), surface.cos_beta.data(), surface.normal_x.data(),
+                           surface.normal_y.data(), surface.rho_cos_beta.data(), ref.size()};
+  const JointLimits limits{params_.min_range, params_.max_range, params_.max_error, params_.max_slope};
+  const JointSums sums = sumJointSystem(inputs, pose, c, limits, kernels_);
+  JointSystem system;
+  system.information << sums.a11, sums.a12, sums.a13, sums.a12, sums.a22, sums.a23, sums.a13, sums.a23, sums.a33;
+  system.gradient << sums.g1, sums.g2, sums.g3;
+  system.sum_w = sums.sum_w;
+  system.sum_we2 = sums.sum_we2;
+  system.used = sums.used;
+  system.error_index = sums.in_index > 0 ? sums.sum_abs_error / sums.in_index : params_.max_error;
+  if (params_.slope_noise_correction) system.slope_noise = slopeNoise(ref, pose, c);
+  return system;
+}
+
+Mat3 ScanMatcher::slopeNoise(const PreparedScan& ref, const Pose2& pose, double c) const {
+  const PreparedScan::SurfaceTerms& surface = ref.surface;
   Mat3 spurious = Mat3::Zero();
-  double sum_we2 = 0.0, sum_abs = 0.0;
-  int used = 0, gated = 0;
-  const size_t n = ref.size();
-  for (size_t j = 0; j < n; ++j) {
-    if (flags[j] | tag[j]) continue;
-    const double r = projected[j];
-    if (!(r > min_range && r < max_range)) continue;
-    const double e = measured[j] - r;
-    const double abs_e = std::abs(e);
-    if (abs_e < 0.5 * max_error) {  // error index: v0.3 pm_error_index2
-      sum_abs += abs_e;
-      ++gated;
-    }
-    // The surface's slope ρ from the reference scan (at the solution the projected profile has
-    // the same), as a point-to-line method takes the line from the reference. Grazing surfaces
-    // (and unknown slopes, NaN) are skipped: neither the slope nor the range is reliable.
-    if (abs_e >= max_error || !(std::abs(surface.rho[j]) <= max_slope)) continue;
-    // Range change for a translation of a surface with slope ρ (the normal terms h1, h2), and
-    // for a rotation about the current origin (a rotation about the reference origin, −∂r''/∂φ,
-    // plus the translation δθ·(y', −x') the two differ by); all scaled by cos β to normal distances.
+  for (size_t j = 0; j < ref.size(); ++j) {
+    if (ref.flags[j] | projection_.tag[j]) continue;
+    const double r = projection_.range[j];
+    if (!(r > params_.min_range && r < params_.max_range)) continue;
+    const double e = ref.range[j] - r;
+    if (std::abs(e) >= params_.max_error || !(std::abs(surface.rho[j]) <= params_.max_slope)) continue;
     const double h1 = surface.normal_x[j], h2 = surface.normal_y[j];
     const double h3 = pose.y * h1 - pose.x * h2 - surface.rho_cos_beta[j] * r;
-    const double en = e * surface.cos_beta[j];
     const double w = c / (c + e * e);
-    const Pair wh1_wh2 = Pair{w, w} * Pair{h1, h2};
-    const double wh1 = wh1_wh2[0], wh3 = w * h3;
-    a11_a22 += wh1_wh2 * Pair{h1, h2};
-    a12_a23 += wh1_wh2 * Pair{h2, h3};
-    a13_a33 += Pair{wh1, wh3} * Pair{h3, h3};
-    g1_g2 += wh1_wh2 * Pair{en, en};
-    g3_w += Pair{wh3, w} * Pair{en, 1.0};
-    sum_we2 += w * en * en;
-    ++used;
-    if (slope_noise) {
-      // The normal (h1, h2) = (cos(φ−β), sin(φ−β)) turns with β; h3 with it.
-      const Vec3 u(h2, -h1, pose.y * h2 + pose.x * h1 - surface.cos_beta[j] * r);
-      const Vec3 h(h1, h2, h3);
-      spurious += (w * surface.beta_variance[j]) * (u * u.transpose() - h * h.transpose());
-    }
+    // The normal (h1, h2) = (cos(φ−β), sin(φ−β)) turns with β; h3 with it.
+    const Vec3 u(h2, -h1, pose.y * h2 + pose.x * h1 - surface.cos_beta[j] * r);
+    const Vec3 h(h1, h2, h3);
+    spurious += (w * surface.beta_variance[j]) * (u * u.transpose() - h * h.transpose());
   }
-  JointSystem system;
-  system.slope_noise = spurious;
-  const double a11 = a11_a22[0], a22 = a11_a22[1], a12 = a12_a23[0], a23 = a12_a23[1];
-  const double a13 = a13_a33[0], a33 = a13_a33[1];
-  system.information << a11, a12, a13, a12, a22, a23, a13, a23, a33;
-  system.gradient << g1_g2[0], g1_g2[1], g3_w[0];
-  system.sum_w = g3_w[1];
-  system.sum_we2 = sum_we2;
-  system.used = used;
-  system.error_index = gated > 0 ? sum_abs / gated : params_.max_error;
-  return system;
+  return spurious;
 }
 
 Mat3 ScanMatcher::covarianceFrom(const JointSystem& system) const {

@@ -16,6 +16,7 @@
 #include "scanmatch/prepared_scan.hpp"
 #include "scanmatch/projection.hpp"
 #include "scanmatch/psm_params.hpp"
+#include "scanmatch/vector_kernels.hpp"
 
 namespace polarslam {
 
@@ -55,6 +56,10 @@ class ScanMatcher {
   void estimateCovariance(const PreparedScan& ref, const PreparedScan& cur, MatchResult& result);
   Mat3 heuristicCovariance(const PreparedScan& ref, double error_index) const;
 
+  /// The vector kernels of the inner loops: the widest the processor has unless set (every
+  /// set gives the same bits; tests and benchmarks compare them).
+  void useKernels(VectorKernels kernels) { kernels_ = kernels; }
+  VectorKernels kernels() const { return kernels_; }
 
  private:
   struct TranslationStep {
@@ -95,6 +100,8 @@ class ScanMatcher {
   double projectedErrorIndex(const PreparedScan& ref) const;
   TranslationStep solveTranslation(const PreparedScan& ref, const Pose2& pose, double c);
   JointSystem jointSystem(const PreparedScan& ref, const Pose2& pose, double c) const;
+  /// JointSystem::slope_noise at `pose` (slope_noise_correction).
+  Mat3 slopeNoise(const PreparedScan& ref, const Pose2& pose, double c) const;
   Mat3 covarianceFrom(const JointSystem& system) const;
   /// error_index and cov of `result` from the system at its final pose, by the configured model.
   void fillCovariance(const PreparedScan& ref, const JointSystem& system, MatchResult& result) const;
@@ -103,6 +110,7 @@ class ScanMatcher {
   CartesianStep solveCartesian(const PreparedScan& ref, double c);
 
   PsmParams params_;
+  VectorKernels kernels_ = widestVectorKernels();
   Projection projection_;
   std::vector<float> proj_masked_, proj_mask_;   // orientation search inputs
   std::vector<double> shift_cost_;               // e(k) by k + window

@@ -1,0 +1,57 @@
+#pragma once
+// The sums of PSM's joint (x, y, θ) system (docs/algorithms.md §11.1): over the bearings where the
+// projected current scan and the reference both have a usable sample, the information matrix
+// HᵀWH, the gradient HᵀWe, Σw, Σw·e² and the error index. Vectorised: they are most of a
+// match's arithmetic.
+#include <cstddef>
+#include <cstdint>
+
+#include "geometry/pose2.hpp"
+#include "scanmatch/vector_kernels.hpp"
+
+namespace polarslam {
+
+/// Per reference bearing: the projected range r'' and its tag, the reference range and flags,
+/// and the reference's surface terms (PreparedScan::SurfaceTerms).
+struct JointInputs {
+  const float* projected;
+  const float* measured;
+  const uint8_t* tag;
+  const uint8_t* flags;
+  const double *rho, *cos_beta, *normal_x, *normal_y, *rho_cos_beta;
+  size_t size;
+};
+
+struct JointLimits {
+  double min_range, max_range;  ///< projected ranges outside are not used
+  double max_error;             ///< residual gate (the error index takes those below half of it)
+  double max_slope;             ///< |ρ| above this (grazing incidence) is left out
+};
+
+struct JointSums {
+  double a11 = 0, a12 = 0, a13 = 0, a22 = 0, a23 = 0, a33 = 0;  ///< HᵀWH, upper triangle
+  double g1 = 0, g2 = 0, g3 = 0;                                ///< HᵀW·e (normal distances)
+  double sum_w = 0, sum_we2 = 0;
+  double sum_abs_error = 0;  ///< Σ|e| over the `in_index` samples within max_error/2
+  int used = 0, in_index = 0;
+};
+
+/// The sums at `pose` (the current laser in the reference laser frame) with weights
+/// w = c/(c + e²).
+JointSums sumJointSystem(const JointInputs& in, const Pose2& pose, double c, const JointLimits& limits,
+                         VectorKernels kernels);
+
+/// The orientation step's slope fit (§8): samples i of the projection against reference
+/// bearings i + k (the pointers offset by the shift k), both masked (0 = unusable), with the
+/// reference's range-profile slope (NaN where unknown).
+struct SlopeFitInputs {
+  const float *projected, *projected_mask, *reference, *reference_mask, *slope;
+  size_t size;
+  double max_error;  ///< residual gate
+};
+struct SlopeFitSums {
+  double num = 0, den = 0;  ///< Σ w·slope·r and Σ w·slope², w = c/(c + r²)
+};
+SlopeFitSums sumSlopeFit(const SlopeFitInputs& in, double c, VectorKernels kernels);
+
+}  // namespace polarslam
