@@ -23,16 +23,15 @@ float median5(float a, float b, float c, float d, float e) {
 }
 
 /// Ranges with increasing bearings, optionally decimated, invalid readings as +inf.
-std::vector<float> orderedRanges(const LaserScan& scan, int decimation) {
+void orderedRanges(const LaserScan& scan, int decimation, std::vector<float>& out) {
   const size_t n = scan.ranges.size();
   const size_t step = static_cast<size_t>(std::max(1, decimation));
-  std::vector<float> out((n + step - 1) / step);
+  out.resize((n + step - 1) / step);
   const bool reversed = scan.angle_increment < 0.0;
   for (size_t k = 0; k < out.size(); ++k) {
     const float r = scan.ranges[reversed ? n - 1 - k * step : k * step];
     out[k] = std::isfinite(r) && r > 0.0f && r < scan.range_max ? r : kNoReturn;
   }
-  return out;
 }
 
 /// Direction of the segment from point i-1 to point i, folded to [0, π).
@@ -103,14 +102,19 @@ void fitSlopes(PreparedScan& out, double half_span, double increment) {
   out.slope_variance.assign(n, std::numeric_limits<float>::quiet_NaN());
   if (n < 3) return;
   auto same = [&](size_t a, size_t b) { return out.segment[a] != 0 && out.segment[a] == out.segment[b]; };
-  // Prefix sums of r and j·r: the slope over a symmetric window is then one difference.
-  std::vector<double> sum_r(n + 1, 0.0), sum_jr(n + 1, 0.0);
+  // Prefix sums of r and j·r: the slope over a symmetric window is then one difference. Scratch
+  // space kept per thread: a scan's preparation then allocates only what it returns.
+  thread_local std::vector<double> sum_r, sum_jr;
+  thread_local std::vector<int> left, right;  // readings of the same segment before and after
+  sum_r.assign(n + 1, 0.0);
+  sum_jr.assign(n + 1, 0.0);
+  left.assign(n, 0);
+  right.assign(n, 0);
   for (size_t i = 0; i < n; ++i) {
     const double r = out.segment[i] != 0 ? out.range[i] : 0.0;
     sum_r[i + 1] = sum_r[i] + r;
     sum_jr[i + 1] = sum_jr[i] + static_cast<double>(i) * r;
   }
-  std::vector<int> left(n, 0), right(n, 0);  // readings of the same segment before and after
   for (size_t i = 1; i < n; ++i) left[i] = same(i, i - 1) ? left[i - 1] + 1 : 0;
   for (size_t i = n - 1; i-- > 0;) right[i] = same(i, i + 1) ? right[i + 1] + 1 : 0;
   constexpr int kMinHalf = 2, kMaxHalf = 12;
@@ -273,8 +277,9 @@ PreparedScan prepareScan(const LaserScan& scan, const PsmParams& params) {
   PreparedScan out;
   out.utime = scan.utime;
   const int step = std::max(1, params.decimation);
-  std::vector<float> raw = orderedRanges(scan, step);
-  const size_t n = raw.size();
+  thread_local std::vector<float> raw;
+  orderedRanges(scan, step, params.median_filter ? raw : out.range);
+  const size_t n = params.median_filter ? raw.size() : out.range.size();
   const double increment = std::abs(scan.angle_increment) * step;
   const double first = scan.angle_increment < 0.0 ? scan.bearing(scan.size() - 1) : scan.angle_min;
   out.geometry = beamGeometry(n, first, increment);
@@ -284,8 +289,6 @@ PreparedScan prepareScan(const LaserScan& scan, const PsmParams& params) {
     if (params.median_replace_threshold > 0.0)
       for (size_t i = 0; i < n; ++i)
         if (!(std::abs(out.range[i] - raw[i]) > params.median_replace_threshold)) out.range[i] = raw[i];
-  } else {
-    out.range = std::move(raw);
   }
 
   out.flags.assign(n, 0);

@@ -6,33 +6,7 @@
 #include <limits>
 #include <numbers>
 
-#if defined(__x86_64__)
-#include <immintrin.h>
-#endif
-
 namespace polarslam {
-namespace {
-
-namespace baseline {
-#define POLARSLAM_LANES 4
-#include "scanmatch/projection_lanes.inc"
-#undef POLARSLAM_LANES
-}  // namespace baseline
-
-#if POLARSLAM_AVX2_KERNELS
-// The same kernels eight lanes wide, for processors that have AVX2 (chosen at run time). Not
-// FMA: a fused multiply-add rounds once where the baseline rounds twice.
-#pragma GCC push_options
-#pragma GCC target("avx2")
-namespace avx2 {
-#define POLARSLAM_LANES 8
-#include "scanmatch/projection_lanes.inc"
-#undef POLARSLAM_LANES
-}  // namespace avx2
-#pragma GCC pop_options
-#endif
-
-}  // namespace
 
 void projectScan(const BeamGeometry& g, const PreparedScan& cur, const Pose2& pose, Projection& out) {
   static const VectorKernels widest = widestVectorKernels();
@@ -46,17 +20,7 @@ void projectScan(const BeamGeometry& g, const PreparedScan& cur, const Pose2& po
   out.tag.assign(g.size, kFlagEmpty);
   for (auto* v : {&out.px, &out.py, &out.index, &out.dx, &out.dy, &out.cross, &out.near_end}) v->resize(padded);
   for (auto* v : {&out.first, &out.count, &out.back_facing}) v->resize(padded);
-#if POLARSLAM_AVX2_KERNELS
-  if (kernels == VectorKernels::Avx2 && vectorKernelsAvailable(kernels)) {
-    avx2::projectReadings(cur, pose, g, out);
-    avx2::spanPairs(cur, g, out);
-  } else
-#endif
-  {
-    (void)kernels;
-    baseline::projectReadings(cur, pose, g, out);
-    baseline::spanPairs(cur, g, out);
-  }
+  detail::projectReadings(g, cur, pose, out, kernels);
   // Raw pointers: the tag stores are bytes, which may alias anything, so the compiler would
   // otherwise reload every vector's data pointer after each of them.
   const float* cos_table = g.cos_float.data();

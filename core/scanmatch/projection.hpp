@@ -35,4 +35,11 @@ void projectScan(const BeamGeometry& ref_geometry, const PreparedScan& cur, cons
 void projectScan(const BeamGeometry& ref_geometry, const PreparedScan& cur, const Pose2& pose, Projection& out,
                  VectorKernels kernels);
 
+namespace detail {
+/// projectScan's work reading by reading, before its z-buffer (vector_kernels.cpp): each reading
+/// in the reference frame and its bearing index, each pair's bearing span and line.
+void projectReadings(const BeamGeometry& ref_geometry, const PreparedScan& cur, const Pose2& pose, Projection& out,
+                     VectorKernels kernels);
+}  // namespace detail
+
 }  // namespace polarslam

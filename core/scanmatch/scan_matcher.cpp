@@ -1,6 +1,6 @@
 #include "scanmatch/scan_matcher.hpp"
 
-#include "scanmatch/joint_sums.hpp"
+#include "scanmatch/match_sums.hpp"
 
 #include <Eigen/Dense>
 
@@ -281,41 +281,16 @@ namespace {
 /// only one scan sees) cost a constant instead of pulling the minimum (v0.3 gates them for its
 /// Hokuyo UTM preset only).
 double shiftCost(const float* p, const float* pm, const float* r, const float* rm, int n, int shift,
-                 float truncation, int& overlap) {
+                 float truncation, VectorKernels kernels, int& overlap) {
   const int first = std::max(0, -shift);
   const int count = std::min(n, n - shift) - first;
   overlap = 0;
   if (count <= 0) return kInf;
-  p += first;
-  pm += first;
-  r += first + shift;
-  rm += first + shift;
-  // One pass, four lanes, both sums at once (the pair count is exact in any order).
-  using Floats = float __attribute__((vector_size(16)));
-  auto load = [](const float* at) {
-    Floats v;
-    std::memcpy(&v, at, sizeof(v));
-    return v;
-  };
-  const Floats cap = Floats{} + truncation;
-  Floats sums{}, pair_sums{};
-  int i = 0;
-  for (; i + 4 <= count; i += 4) {
-    const Floats d = load(p + i) - load(r + i);
-    const Floats magnitude = d < 0.0f ? -d : d;
-    const Floats both = load(pm + i) * load(rm + i);
-    sums += (magnitude < cap ? magnitude : cap) * both;
-    pair_sums += both;
-  }
-  float sum = (sums[0] + sums[1]) + (sums[2] + sums[3]);
-  float pairs = (pair_sums[0] + pair_sums[1]) + (pair_sums[2] + pair_sums[3]);
-  for (; i < count; ++i) {
-    const float both = pm[i] * rm[i];
-    sum += std::min(std::abs(p[i] - r[i]), truncation) * both;
-    pairs += both;
-  }
-  overlap = static_cast<int>(pairs + 0.5f);
-  return overlap > 0 ? static_cast<double>(sum) / pairs : kInf;
+  const ShiftCostInputs inputs{p + first, pm + first, r + first + shift, rm + first + shift,
+                               static_cast<size_t>(count), truncation};
+  const ShiftCostSums sums = sumShiftCost(inputs, kernels);
+  overlap = static_cast<int>(sums.pairs + 0.5f);
+  return overlap > 0 ? static_cast<double>(sums.sum) / sums.pairs : kInf;
 }
 
 void decimate(const std::vector<float>& in, int stride, std::vector<float>& out) {
@@ -331,12 +306,8 @@ ScanMatcher::OrientationStep ScanMatcher::searchOrientation(const PreparedScan& 
   const double increment = ref.geometry->angle_increment;
   proj_masked_.resize(n);
   proj_mask_.resize(n);
-  for (size_t j = 0; j < n; ++j) {
-    const bool use = projection_.tag[j] == 0 && projection_.range[j] > params_.min_range &&
-                     projection_.range[j] < params_.max_range;
-    proj_masked_[j] = use ? projection_.range[j] : 0.0f;
-    proj_mask_[j] = use ? 1.0f : 0.0f;
-  }
+  maskSamples({projection_.range.data(), projection_.tag.data(), n, params_.min_range, params_.max_range},
+              proj_masked_.data(), proj_mask_.data(), kernels_);
   const int w = std::clamp(static_cast<int>(std::lround(window / increment)), 1, static_cast<int>(n) - 1);
   shift_cost_.assign(static_cast<size_t>(2 * w + 1), std::numeric_limits<double>::quiet_NaN());
   const auto truncation = static_cast<float>(params_.max_error);
@@ -347,7 +318,7 @@ ScanMatcher::OrientationStep ScanMatcher::searchOrientation(const PreparedScan& 
     if (std::isnan(e)) {
       int overlap = 0;
       e = shiftCost(proj_masked_.data(), proj_mask_.data(), ref.masked_range.data(), ref.mask.data(), size, k,
-                    truncation, overlap);
+                    truncation, kernels_, overlap);
       if (overlap < stepMinPoints()) e = kInf;
     }
     return e;
@@ -368,7 +339,7 @@ ScanMatcher::OrientationStep ScanMatcher::searchOrientation(const PreparedScan& 
     for (int m = -(w / stride); m <= w / stride; ++m) {
       int overlap = 0;
       const double e = shiftCost(coarse_[0].data(), coarse_[1].data(), coarse_[2].data(), coarse_[3].data(),
-                                 coarse_size, m, truncation, overlap);
+                                 coarse_size, m, truncation, kernels_, overlap);
       if (overlap * stride >= stepMinPoints() && e < best) {
         best = e;
         best_k = m * stride;

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "scan_fixtures.hpp"
-#include "scanmatch/joint_sums.hpp"
+#include "scanmatch/match_sums.hpp"
 #include "scanmatch/scan_matcher.hpp"
 
 namespace polarslam {
@@ -127,6 +127,51 @@ TEST(VectorKernels, JointSumsAreThoseOfAPlainLoopWhateverTheInputs) {
     }
     if (n >= 181) {
       EXPECT_GT(static_cast<size_t>(plain.used), n / 2) << n;
+    }
+  }
+}
+
+TEST(VectorKernels, ShiftCostSlopeFitAndMasksAreThoseOfPlainLoops) {
+  fixtures::Noise noise(9);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (size_t n : {0, 1, 7, 8, 9, 61, 181, 183}) {
+    std::vector<float> p(n), pm(n), r(n), rm(n), slope(n), range(n);
+    std::vector<uint8_t> tag(n);
+    for (size_t i = 0; i < n; ++i) {
+      pm[i] = noise.uniform() < 0.8 ? 1.0f : 0.0f;
+      rm[i] = noise.uniform() < 0.8 ? 1.0f : 0.0f;
+      p[i] = pm[i] * static_cast<float>(noise.uniform(0.1, 8.0));
+      r[i] = rm[i] * static_cast<float>(p[i] + noise.normal(noise.uniform() < 0.2 ? 2.0 : 0.05));
+      slope[i] = static_cast<float>(noise.uniform() < 0.1 ? nan : noise.normal(0.05));
+      range[i] = static_cast<float>(noise.uniform() < 0.1 ? std::numeric_limits<double>::infinity() : noise.uniform(0.0, 12.0));
+      tag[i] = noise.uniform() < 0.1 ? kFlagEmpty : 0;
+    }
+    float sum = 0.0f, pairs = 0.0f;
+    double num = 0.0, den = 0.0;
+    const double c = 0.49, max_error = 1.0;
+    for (size_t i = 0; i < n; ++i) {
+      sum += std::min(std::abs(p[i] - r[i]), 1.0f) * pm[i] * rm[i];
+      pairs += pm[i] * rm[i];
+      const double e = static_cast<double>(p[i]) - r[i];
+      if (pm[i] == 0.0f || rm[i] == 0.0f || !std::isfinite(slope[i]) || std::abs(e) >= max_error) continue;
+      const double w = c / (c + e * e);
+      num += w * slope[i] * e;
+      den += w * slope[i] * slope[i];
+    }
+    for (VectorKernels kernels : {VectorKernels::Baseline, VectorKernels::Avx2}) {
+      const ShiftCostSums cost = sumShiftCost({p.data(), pm.data(), r.data(), rm.data(), n, 1.0f}, kernels);
+      EXPECT_EQ(cost.pairs, pairs) << n;
+      EXPECT_NEAR(cost.sum, sum, 1e-5f * (1.0f + sum)) << n;
+      const SlopeFitSums fit = sumSlopeFit({p.data(), pm.data(), r.data(), rm.data(), slope.data(), n, max_error}, c, kernels);
+      EXPECT_NEAR(fit.num, num, 1e-12 * (1.0 + std::abs(num))) << n;
+      EXPECT_NEAR(fit.den, den, 1e-12 * (1.0 + den)) << n;
+      std::vector<float> values(n, -1.0f), mask(n, -1.0f);
+      maskSamples({range.data(), tag.data(), n, 0.1, 10.0}, values.data(), mask.data(), kernels);
+      for (size_t i = 0; i < n; ++i) {
+        const bool use = tag[i] == 0 && range[i] > 0.1 && range[i] < 10.0;
+        EXPECT_EQ(mask[i], use ? 1.0f : 0.0f) << n << " " << i;
+        EXPECT_EQ(values[i], use ? range[i] : 0.0f) << n << " " << i;
+      }
     }
   }
 }

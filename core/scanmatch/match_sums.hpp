@@ -1,8 +1,8 @@
 #pragma once
-// The sums of PSM's joint (x, y, θ) system (docs/algorithms.md §11.1): over the bearings where the
-// projected current scan and the reference both have a usable sample, the information matrix
-// HᵀWH, the gradient HᵀWe, Σw, Σw·e² and the error index. Vectorised: they are most of a
-// match's arithmetic.
+// The sums of PSM's steps, vectorised (they are most of a match's arithmetic): the joint
+// (x, y, θ) system (docs/algorithms.md §11.1: over the bearings where the projected current scan
+// and the reference both have a usable sample, the information matrix HᵀWH, the gradient HᵀWe,
+// Σw, Σw·e² and the error index), the orientation step's slope fit and its shift cost (§8).
 #include <cstddef>
 #include <cstdint>
 
@@ -53,5 +53,28 @@ struct SlopeFitSums {
   double num = 0, den = 0;  ///< Σ w·slope·r and Σ w·slope², w = c/(c + r²)
 };
 SlopeFitSums sumSlopeFit(const SlopeFitInputs& in, double c, VectorKernels kernels);
+
+/// The orientation search's cost e(k) (§8) at one shift: samples i of the projection against
+/// reference bearings i + k (the pointers offset by k), both masked (0 = unusable, values 0 there).
+struct ShiftCostInputs {
+  const float *projected, *projected_mask, *reference, *reference_mask;
+  size_t size;
+  float truncation;  ///< each |difference| counts at most this
+};
+struct ShiftCostSums {
+  float sum = 0;    ///< Σ min(|p_i − r_{i+k}|, truncation) over pairs usable in both
+  float pairs = 0;  ///< how many such pairs (exact)
+};
+ShiftCostSums sumShiftCost(const ShiftCostInputs& in, VectorKernels kernels);
+
+/// The projected ranges the orientation search uses: values[j] = range[j] where the sample is
+/// usable (tag 0, min_range < range < max_range) and 0 elsewhere, mask[j] = 1 or 0.
+struct MaskInputs {
+  const float* range;
+  const uint8_t* tag;
+  size_t size;
+  double min_range, max_range;
+};
+void maskSamples(const MaskInputs& in, float* values, float* mask, VectorKernels kernels);
 
 }  // namespace polarslam
