@@ -1,5 +1,7 @@
 #include "scanmatch/prepared_scan.hpp"
 
+#include "scanmatch/vector_kernels.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -96,7 +98,7 @@ double corridorDirection(const std::vector<double>& angles) {
 /// through readings i−k…i+k of its segment (σ_slope = σ_r·√(3/(k(k+1)(2k+1))) per beam), k at
 /// least 2 and covering `half_span` of arc, at most 12, fewer at segment ends; NaN at the ends.
 /// Noisy slopes would give the matcher information it does not have, e.g. along a corridor.
-void fitSlopes(PreparedScan& out, double half_span, double increment) {
+void fitSlopes(PreparedScan& out, double half_span, double increment, VectorKernels kernels) {
   const size_t n = out.size();
   out.slope.assign(n, std::numeric_limits<float>::quiet_NaN());
   out.slope_variance.assign(n, std::numeric_limits<float>::quiet_NaN());
@@ -104,10 +106,12 @@ void fitSlopes(PreparedScan& out, double half_span, double increment) {
   auto same = [&](size_t a, size_t b) { return out.segment[a] != 0 && out.segment[a] == out.segment[b]; };
   // Prefix sums of r and j·r: the slope over a symmetric window is then one difference. Scratch
   // space kept per thread: a scan's preparation then allocates only what it returns.
-  thread_local std::vector<double> sum_r, sum_jr;
+  thread_local std::vector<double> sum_r, sum_jr, moment, denominator;
   thread_local std::vector<int> left, right;  // readings of the same segment before and after
   sum_r.assign(n + 1, 0.0);
   sum_jr.assign(n + 1, 0.0);
+  moment.assign(n, 0.0);
+  denominator.assign(n, 0.0);  // 0: no slope
   left.assign(n, 0);
   right.assign(n, 0);
   for (size_t i = 0; i < n; ++i) {
@@ -119,9 +123,11 @@ void fitSlopes(PreparedScan& out, double half_span, double increment) {
   for (size_t i = n - 1; i-- > 0;) right[i] = same(i, i + 1) ? right[i + 1] + 1 : 0;
   constexpr int kMinHalf = 2, kMaxHalf = 12;
   std::array<double, kMaxHalf + 1> sum_j2{};  // Σ j² over −k…k
+  std::array<float, kMaxHalf + 1> slope_variance{};
   for (int k = 1; k <= kMaxHalf; ++k) {
     const double kd = k;
     sum_j2[static_cast<size_t>(k)] = kd * (kd + 1.0) * (2.0 * kd + 1.0) / 3.0;
+    slope_variance[static_cast<size_t>(k)] = static_cast<float>(1.0 / sum_j2[static_cast<size_t>(k)]);
   }
   for (size_t i = 1; i + 1 < n; ++i) {
     int wanted = kMinHalf;
@@ -132,55 +138,27 @@ void fitSlopes(PreparedScan& out, double half_span, double increment) {
     const int k = std::min({wanted, left[i], right[i]});
     if (k < 1) continue;
     const size_t a = i - static_cast<size_t>(k), b = i + static_cast<size_t>(k) + 1;
-    const double moment = (sum_jr[b] - sum_jr[a]) - static_cast<double>(i) * (sum_r[b] - sum_r[a]);
-    out.slope[i] = static_cast<float>(moment / sum_j2[static_cast<size_t>(k)]);
-    out.slope_variance[i] = static_cast<float>(1.0 / sum_j2[static_cast<size_t>(k)]);
+    moment[i] = (sum_jr[b] - sum_jr[a]) - static_cast<double>(i) * (sum_r[b] - sum_r[a]);
+    denominator[i] = sum_j2[static_cast<size_t>(k)];
+    out.slope_variance[i] = slope_variance[static_cast<size_t>(k)];
   }
-}
-
-using Doubles = double __attribute__((vector_size(16)));
-
-Doubles squareRoot(Doubles x) {
-#if defined(__SSE2__)
-  return __builtin_ia32_sqrtpd(x);
-#else
-  return Doubles{std::sqrt(x[0]), std::sqrt(x[1])};
-#endif
+  detail::divideSlopes(moment.data(), denominator.data(), n, out.slope.data(), kernels);
 }
 
 /// What PSM's joint system needs of the reference alone, so that each match iteration only adds
-/// the pose-dependent part. Two bearings at a time (SSE2: two doubles), all computed, the unusable
-/// ones then set to NaN.
-void computeSurfaceTerms(PreparedScan& scan) {
-  using Masks = int64_t __attribute__((vector_size(16)));
+/// the pose-dependent part; NaN where a bearing is unusable.
+void computeSurfaceTerms(PreparedScan& scan, VectorKernels kernels) {
   const size_t n = scan.size();
   const BeamGeometry& g = *scan.geometry;
   auto& s = scan.surface;
-  const size_t even = (n + 1) / 2 * 2;  // whole pairs; the spare last entry is cut off at the end
-  for (auto* v : {&s.rho, &s.cos_beta, &s.normal_x, &s.normal_y, &s.rho_cos_beta, &s.beta_variance}) v->resize(even);
-  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
-  const double increment = g.angle_increment;
-  auto pair = [&](const auto& v, size_t j) { return Doubles{static_cast<double>(v[j]), static_cast<double>(j + 1 < n ? v[j + 1] : v[j])}; };
-  auto put = [](std::vector<double>& v, size_t j, Doubles x) { std::memcpy(&v[j], &x, sizeof(x)); };
-  const Doubles nans{nan, nan};
-  for (size_t j = 0; j < n; j += 2) {
-    const Doubles slope = pair(scan.slope, j) / increment;  // ∂r/∂φ
-    const Masks finite = (slope < inf) & (slope > -inf);
-    const Masks usable = finite & Masks{scan.flags[j] == 0 ? -1 : 0, j + 1 < n && scan.flags[j + 1] == 0 ? -1 : 0};
-    const Doubles r = pair(scan.range, j);
-    const Doubles rho = slope / r;
-    const Doubles cos_beta = 1.0 / squareRoot(1.0 + rho * rho);
-    const Doubles co = pair(g.cos_table, j), si = pair(g.sin_table, j);
-    // ρ = (∂r/∂j)/(r·Δφ) and dβ/dρ = cos²β.
-    const Doubles cos2 = cos_beta * cos_beta, arc = r * increment;
-    put(s.rho, j, usable ? rho : nans);
-    put(s.cos_beta, j, usable ? cos_beta : nans);
-    put(s.normal_x, j, usable ? (co + rho * si) * cos_beta : nans);
-    put(s.normal_y, j, usable ? (si - rho * co) * cos_beta : nans);
-    put(s.rho_cos_beta, j, usable ? rho * cos_beta : nans);
-    put(s.beta_variance, j, usable ? cos2 * cos2 * pair(scan.slope_variance, j) / (arc * arc) : nans);
-  }
-  for (auto* v : {&s.rho, &s.cos_beta, &s.normal_x, &s.normal_y, &s.rho_cos_beta, &s.beta_variance}) v->resize(n);
+  auto terms = {&s.rho, &s.cos_beta, &s.normal_x, &s.normal_y, &s.rho_cos_beta, &s.beta_variance};
+  for (auto* v : terms) v->resize((n + 3) / 4 * 4);  // whole blocks; the spare entries are cut off below
+  detail::surfaceTerms({scan.slope.data(), scan.range.data(), scan.slope_variance.data(), g.cos_table.data(),
+                        g.sin_table.data(), scan.flags.data(), n, g.angle_increment},
+                       {s.rho.data(), s.cos_beta.data(), s.normal_x.data(), s.normal_y.data(), s.rho_cos_beta.data(),
+                        s.beta_variance.data()},
+                       kernels);
+  for (auto* v : terms) v->resize(n);
 }
 
 }  // namespace
@@ -319,8 +297,9 @@ PreparedScan prepareScan(const LaserScan& scan, const PsmParams& params) {
   out.pair_mask.assign(padded, 0);
   for (size_t i = 1; i < n; ++i)
     if (out.segment[i] != 0 && out.segment[i] == out.segment[i - 1]) out.pair_mask[i] = -1;
-  fitSlopes(out, params.slope_half_span, increment);
-  computeSurfaceTerms(out);
+  static const VectorKernels kernels = widestVectorKernels();
+  fitSlopes(out, params.slope_half_span, increment, kernels);
+  computeSurfaceTerms(out, kernels);
   return out;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numbers>
 
 #include "scanmatch/match_sums.hpp"
@@ -15,6 +16,9 @@
 namespace polarslam {
 namespace {
 
+using detail::SurfaceInputs;
+using detail::SurfaceOutputs;
+
 // Every kernel twice: SSE2 (any x86-64, and the vector extension's generic code elsewhere) and,
 // for processors that have it, AVX2. Not FMA: a fused multiply-add rounds once where the
 // baseline rounds twice.
@@ -25,6 +29,9 @@ namespace projection {
 }
 namespace sums {
 #include "scanmatch/match_sums_lanes.inc"
+}
+namespace preparation {
+#include "scanmatch/prepared_scan_lanes.inc"
 }
 #undef POLARSLAM_VECTOR_BYTES
 }  // namespace baseline
@@ -40,6 +47,9 @@ namespace projection {
 namespace sums {
 #include "scanmatch/match_sums_lanes.inc"
 }
+namespace preparation {
+#include "scanmatch/prepared_scan_lanes.inc"
+}
 #undef POLARSLAM_VECTOR_BYTES
 }  // namespace avx2
 #pragma GCC pop_options
@@ -54,7 +64,10 @@ bool wide(VectorKernels kernels) { return kernels == VectorKernels::Avx2 && vect
 bool vectorKernelsAvailable(VectorKernels kernels) {
   if (kernels == VectorKernels::Baseline) return true;
 #if POLARSLAM_AVX2_KERNELS
-  static const bool avx2 = __builtin_cpu_supports("avx2");
+  static const bool avx2 = [] {
+    __builtin_cpu_init();  // may be asked from a static constructor, before libgcc's has run
+    return __builtin_cpu_supports("avx2") != 0;
+  }();
   return avx2;
 #else
   return false;
@@ -74,6 +87,16 @@ void projectReadings(const BeamGeometry& g, const PreparedScan& cur, const Pose2
                      VectorKernels kernels) {
   if (wide(kernels)) avx2::projection::projectReadings(g, cur, pose, out);
   else baseline::projection::projectReadings(g, cur, pose, out);
+}
+
+void divideSlopes(const double* moment, const double* denominator, size_t n, float* slope, VectorKernels kernels) {
+  if (wide(kernels)) avx2::preparation::divideSlopes(moment, denominator, n, slope);
+  else baseline::preparation::divideSlopes(moment, denominator, n, slope);
+}
+
+void surfaceTerms(const SurfaceInputs& in, const SurfaceOutputs& out, VectorKernels kernels) {
+  if (wide(kernels)) avx2::preparation::surfaceTerms(in, out);
+  else baseline::preparation::surfaceTerms(in, out);
 }
 }  // namespace detail
 

@@ -53,6 +53,45 @@ TEST(VectorKernels, EveryInstructionSetMatchesToTheBit) {
   }
 }
 
+TEST(VectorKernels, PreparationArithmeticMatchesToTheBit) {
+  if (!vectorKernelsAvailable(VectorKernels::Avx2)) GTEST_SKIP() << "this processor has no AVX2: only the baseline runs";
+  const World office = fixtures::clutteredOffice();
+  fixtures::Noise noise(3);
+  fixtures::ScanSpec spec;
+  spec.noise_sigma = 0.01;
+  for (size_t beams : {181, 182, 183, 361}) {
+    spec.beams = beams;
+    const PreparedScan scan = prepareScan(fixtures::simulateScan(office, {0.4, -0.3, 0.2}, spec, &noise), {});
+    const BeamGeometry& g = *scan.geometry;
+    const size_t n = scan.size(), padded = (n + 3) / 4 * 4;
+    std::vector<double> moment(n), denominator(n);
+    for (size_t i = 0; i < n; ++i) {
+      moment[i] = noise.normal(3.0);
+      denominator[i] = noise.uniform() < 0.2 ? 0.0 : noise.uniform(1.0, 20.0);
+    }
+    std::vector<float> slopes[2] = {std::vector<float>(n), std::vector<float>(n)};
+    std::vector<double> terms[2][6];
+    for (int k = 0; k < 2; ++k) {
+      const VectorKernels kernels = k == 0 ? VectorKernels::Baseline : VectorKernels::Avx2;
+      detail::divideSlopes(moment.data(), denominator.data(), n, slopes[k].data(), kernels);
+      for (auto& t : terms[k]) t.assign(padded, -1.0);
+      detail::surfaceTerms({scan.slope.data(), scan.range.data(), scan.slope_variance.data(), g.cos_table.data(),
+                            g.sin_table.data(), scan.flags.data(), n, g.angle_increment},
+                           {terms[k][0].data(), terms[k][1].data(), terms[k][2].data(), terms[k][3].data(),
+                            terms[k][4].data(), terms[k][5].data()},
+                           kernels);
+    }
+    EXPECT_EQ(0, std::memcmp(slopes[0].data(), slopes[1].data(), n * sizeof(float))) << beams;
+    for (size_t i = 0; i < n; ++i)
+      EXPECT_EQ(std::isnan(slopes[0][i]), denominator[i] == 0.0) << beams << " " << i;
+    for (int t = 0; t < 6; ++t)
+      EXPECT_EQ(0, std::memcmp(terms[0][t].data(), terms[1][t].data(), n * sizeof(double))) << beams << " term " << t;
+    // And they are what the scan was prepared with.
+    EXPECT_EQ(0, std::memcmp(terms[0][0].data(), scan.surface.rho.data(), n * sizeof(double))) << beams;
+    EXPECT_EQ(0, std::memcmp(terms[0][5].data(), scan.surface.beta_variance.data(), n * sizeof(double))) << beams;
+  }
+}
+
 /// The joint system's sums as a plain loop (docs/algorithms.md §11.1), to compare with.
 JointSums plainSums(const JointInputs& in, const Pose2& pose, double c, const JointLimits& limits) {
   JointSums s;
