@@ -1,6 +1,7 @@
 #include "scanmatch/beam_geometry.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <mutex>
 
 namespace polarslam {
@@ -25,6 +26,8 @@ std::shared_ptr<const BeamGeometry> beamGeometry(size_t size, double angle_min, 
   }
   g->cos_float.assign(g->cos_table.begin(), g->cos_table.end());
   g->sin_float.assign(g->sin_table.begin(), g->sin_table.end());
+  g->centre_cos = static_cast<float>(std::cos(g->centre()));
+  g->centre_sin = static_cast<float>(std::sin(g->centre()));
   if (cache.size() == kCacheSize) cache.erase(cache.begin());
   cache.push_back(g);
   return g;

@@ -15,6 +15,7 @@ struct BeamGeometry {
   double angle_increment = 0.0;  ///< > 0
   std::vector<double> cos_table, sin_table;
   std::vector<float> cos_float, sin_float;  ///< the same in single precision (projection)
+  float centre_cos = 1.0f, centre_sin = 0.0f;  ///< of centre(), in single precision (projection)
 
   double bearing(size_t i) const { return angle_min + static_cast<double>(i) * angle_increment; }
   double fieldOfView() const { return angle_increment * static_cast<double>(size - 1); }

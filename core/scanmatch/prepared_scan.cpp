@@ -114,13 +114,18 @@ void fitSlopes(PreparedScan& out, double half_span, double increment, VectorKern
   denominator.assign(n, 0.0);  // 0: no slope
   left.assign(n, 0);
   right.assign(n, 0);
+  // The running values stay in registers (through the arrays, each step would wait for the
+  // previous one's store).
+  double running_r = 0.0, running_jr = 0.0;
   for (size_t i = 0; i < n; ++i) {
     const double r = out.segment[i] != 0 ? out.range[i] : 0.0;
-    sum_r[i + 1] = sum_r[i] + r;
-    sum_jr[i + 1] = sum_jr[i] + static_cast<double>(i) * r;
+    running_r += r;
+    running_jr += static_cast<double>(i) * r;
+    sum_r[i + 1] = running_r;
+    sum_jr[i + 1] = running_jr;
   }
-  for (size_t i = 1; i < n; ++i) left[i] = same(i, i - 1) ? left[i - 1] + 1 : 0;
-  for (size_t i = n - 1; i-- > 0;) right[i] = same(i, i + 1) ? right[i + 1] + 1 : 0;
+  for (int i = 1, run = 0; i < static_cast<int>(n); ++i) left[i] = run = same(i, i - 1) ? run + 1 : 0;
+  for (int i = static_cast<int>(n) - 2, run = 0; i >= 0; --i) right[i] = run = same(i, i + 1) ? run + 1 : 0;
   constexpr int kMinHalf = 2, kMaxHalf = 12;
   std::array<double, kMaxHalf + 1> sum_j2{};  // Σ j² over −k…k
   std::array<float, kMaxHalf + 1> slope_variance{};
