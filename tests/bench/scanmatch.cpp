@@ -42,6 +42,10 @@ struct Options {
   std::string out = "out/bench-scanmatch";
   std::string data = POLARSLAM_SHARED_DATA_DIR;
   int pairs = 500;
+  /// Times per pair in sections 2–4: the fastest of this many passes over all pairs. Each pass
+  /// goes through every pair before the next, so each match still starts with its scans out of
+  /// the cache; the passes only filter out the interruptions of a shared machine.
+  int timing_passes = 3;
   uint64_t seed = 1;
   PsmParams psm;  ///< the matcher's parameters: defaults, or a PSM SLAM configuration's psm section
 };
@@ -142,7 +146,7 @@ struct PairStats {
   double iterations = 0.0;
 };
 
-PairStats runPairs(const std::vector<PairCase>& pairs, const Method& m) {
+PairStats runPairs(const std::vector<PairCase>& pairs, const Method& m, int timing_passes = 1) {
   ScanMatcher matcher(m.params);
   PairStats s;
   int ok = 0;
@@ -157,6 +161,12 @@ PairStats runPairs(const std::vector<PairCase>& pairs, const Method& m) {
     ok += success(r, p.truth);
     if (r.ok()) s.nees.push_back(fixtures::nees(r.pose, p.truth, r.cov));
   }
+  for (int pass = 1; pass < timing_passes; ++pass)
+    for (size_t k = 0; k < pairs.size(); ++k) {
+      const auto start = Clock::now();
+      matcher.match(pairs[k].ref, pairs[k].cur, pairs[k].guess, m.method);
+      s.time_us[k] = std::min(s.time_us[k], microsSince(start));
+    }
   s.success = static_cast<double>(ok) / static_cast<double>(pairs.size());
   s.iterations /= static_cast<double>(pairs.size());
   return s;
@@ -216,7 +226,7 @@ SimulatedFigures simulatedPairsExperiments(const Options& o) {
   std::vector<Method> all = methods(o.psm);
   all.push_back({"PSM original", MatchMethod::Psm, originalPsm()});
   for (const Method& m : all) {
-    const PairStats s = runPairs(accuracy, m);
+    const PairStats s = runPairs(accuracy, m, o.timing_passes);
     f.accuracy[m.name] = s;
     std::printf("   %-13s %7.1f%% %9.2f %9.2f %9.2f %9.3f %9.3f %7.1f\n", m.name.c_str(), 100 * s.success,
                 1000 * mean(s.translation), 1000 * median(s.translation), 1000 * percentile(s.translation, 0.95),
@@ -233,14 +243,15 @@ SimulatedFigures simulatedPairsExperiments(const Options& o) {
               "disc, heading uniform)\n");
   std::printf("   %-13s %16s %16s\n", "method", "0.3 m / 20°", "0.5 m / 30°");
   for (const Method& m : all) {
-    f.near[m.name] = runPairs(near, m);
-    f.far[m.name] = runPairs(far, m);
+    f.near[m.name] = runPairs(near, m, o.timing_passes);
+    f.far[m.name] = runPairs(far, m, o.timing_passes);
     std::printf("   %-13s %15.1f%% %15.1f%%\n", m.name.c_str(), 100 * f.near[m.name].success, 100 * f.far[m.name].success);
   }
   std::printf("   PSM: %s (%.1f %%), %s (%.1f %%)\n", pass(f.near["PSM"].success >= 0.99), 100 * f.near["PSM"].success,
               pass(f.far["PSM"].success >= 0.95), 100 * f.far["PSM"].success);
 
-  std::printf("\n== 4. Time per 181-beam match (wall clock per match, median; scans prepared beforehand) ==\n");
+  std::printf("\n== 4. Time per 181-beam match (wall clock per match, median over pairs of each pair's fastest of %d "
+              "passes; scans prepared beforehand) ==\n", o.timing_passes);
   std::printf("   goals: PSM median ≤ 20 us on one core (the original C code: about 80 us); with the scan's preparation "
               "included ≤ 12 us (issue 19)\n");
   std::printf("   %-13s %12s %12s %12s\n", "method", "guess 0.1/5", "0.3 m/20°", "0.5 m/30°");
@@ -576,6 +587,10 @@ int main(int argc, char** argv) {
   app.add_option("--data", o.data, "shared data folder (mit-csail/)")->capture_default_str();
   app.add_option("--pairs", o.pairs, "simulated pairs per experiment")->capture_default_str();
   app.add_option("--seed", o.seed)->capture_default_str();
+  app.add_option("--timing-passes", o.timing_passes,
+                 "time each simulated pair as the fastest of this many passes over all pairs")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   std::string config;
   app.add_option("--psm-config", config, "PSM SLAM configuration (YAML) whose psm section the matchers use")
       ->check(CLI::ExistingFile);
