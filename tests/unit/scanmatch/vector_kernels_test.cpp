@@ -14,6 +14,12 @@
 namespace polarslam {
 namespace {
 
+fixtures::ScanSpec noisyLaser() {
+  fixtures::ScanSpec spec;
+  spec.noise_sigma = 0.01;
+  return spec;
+}
+
 bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof(a)) == 0; }
 
 void expectSameBits(const MatchResult& a, const MatchResult& b, int pair) {
@@ -30,8 +36,7 @@ TEST(VectorKernels, EveryInstructionSetMatchesToTheBit) {
   if (!vectorKernelsAvailable(VectorKernels::Avx2)) GTEST_SKIP() << "this processor has no AVX2: only the baseline runs";
   const World office = fixtures::clutteredOffice();
   fixtures::Noise noise(77);
-  fixtures::ScanSpec spec;
-  spec.noise_sigma = 0.01;
+  fixtures::ScanSpec spec = noisyLaser();
   ScanMatcher baseline, avx2;
   baseline.useKernels(VectorKernels::Baseline);
   avx2.useKernels(VectorKernels::Avx2);
@@ -57,8 +62,7 @@ TEST(VectorKernels, PreparationArithmeticMatchesToTheBit) {
   if (!vectorKernelsAvailable(VectorKernels::Avx2)) GTEST_SKIP() << "this processor has no AVX2: only the baseline runs";
   const World office = fixtures::clutteredOffice();
   fixtures::Noise noise(3);
-  fixtures::ScanSpec spec;
-  spec.noise_sigma = 0.01;
+  fixtures::ScanSpec spec = noisyLaser();
   for (size_t beams : {181, 182, 183, 361}) {
     spec.beams = beams;
     const PreparedScan scan = prepareScan(fixtures::simulateScan(office, {0.4, -0.3, 0.2}, spec, &noise), {});
