@@ -36,10 +36,14 @@ struct JointSums {
   int used = 0, in_index = 0;
 };
 
+/// Which part of the joint system to sum: all of it, or only the translation's (a13, a23, a33
+/// and g3 left at 0; the rest the same bits).
+enum class JointTerms { All, Translation };
+
 /// The sums at `pose` (the current laser in the reference laser frame) with weights
 /// w = c/(c + e²).
 JointSums sumJointSystem(const JointInputs& in, const Pose2& pose, double c, const JointLimits& limits,
-                         VectorKernels kernels);
+                         VectorKernels kernels, JointTerms terms = JointTerms::All);
 
 /// The orientation step's slope fit (§8): samples i of the projection against reference
 /// bearings i + k (the pointers offset by the shift k), both masked (0 = unusable), with the

@@ -229,7 +229,7 @@ ScanMatcher::TranslationStep ScanMatcher::solveTranslation(const PreparedScan& r
   if (params_.surface_jacobian) {
     // The translation block of the joint system: normal-distance residuals, so that walls seen
     // at grazing angles neither dominate nor slow convergence down.
-    const JointSystem system = jointSystem(ref, pose, c);
+    const JointSystem system = jointSystem(ref, pose, c, JointTerms::Translation);
     step.used = system.used;
     if (step.used < stepMinPoints()) {
       step.status = MatchStatus::NotEnoughPoints;
@@ -681,13 +681,14 @@ Mat3 ScanMatcher::heuristicCovariance(const PreparedScan& ref, double error_inde
   return cov;
 }
 
-ScanMatcher::JointSystem ScanMatcher::jointSystem(const PreparedScan& ref, const Pose2& pose, double c) const {
+ScanMatcher::JointSystem ScanMatcher::jointSystem(const PreparedScan& ref, const Pose2& pose, double c,
+                                                  JointTerms terms) const {
   const PreparedScan::SurfaceTerms& surface = ref.surface;
   const JointInputs inputs{projection_.range.data(), ref.range.data(), projection_.tag.data(), ref.flags.data(),
                            surface.rho.data(), surface.cos_beta.data(), surface.normal_x.data(),
                            surface.normal_y.data(), surface.rho_cos_beta.data(), ref.size()};
   const JointLimits limits{params_.min_range, params_.max_range, params_.max_error, params_.max_slope};
-  const JointSums sums = sumJointSystem(inputs, pose, c, limits, kernels_);
+  const JointSums sums = sumJointSystem(inputs, pose, c, limits, kernels_, terms);
   JointSystem system;
   system.information << sums.a11, sums.a12, sums.a13, sums.a12, sums.a22, sums.a23, sums.a13, sums.a23, sums.a33;
   system.gradient << sums.g1, sums.g2, sums.g3;
@@ -695,7 +696,7 @@ ScanMatcher::JointSystem ScanMatcher::jointSystem(const PreparedScan& ref, const
   system.sum_we2 = sums.sum_we2;
   system.used = sums.used;
   system.error_index = sums.in_index > 0 ? sums.sum_abs_error / sums.in_index : params_.max_error;
-  if (params_.slope_noise_correction) system.slope_noise = slopeNoise(ref, pose, c);
+  if (params_.slope_noise_correction && terms == JointTerms::All) system.slope_noise = slopeNoise(ref, pose, c);
   return system;
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "geometry/pose2.hpp"
+#include "scanmatch/match_sums.hpp"
 #include "scanmatch/prepared_scan.hpp"
 #include "scanmatch/projection.hpp"
 #include "scanmatch/psm_params.hpp"
@@ -99,7 +100,8 @@ class ScanMatcher {
   double weightingFactor(int iteration, const PreparedScan& ref) const;
   double projectedErrorIndex(const PreparedScan& ref) const;
   TranslationStep solveTranslation(const PreparedScan& ref, const Pose2& pose, double c);
-  JointSystem jointSystem(const PreparedScan& ref, const Pose2& pose, double c) const;
+  JointSystem jointSystem(const PreparedScan& ref, const Pose2& pose, double c,
+                          JointTerms terms = JointTerms::All) const;
   /// JointSystem::slope_noise at `pose` (slope_noise_correction).
   Mat3 slopeNoise(const PreparedScan& ref, const Pose2& pose, double c) const;
   Mat3 covarianceFrom(const JointSystem& system) const;

@@ -101,9 +101,12 @@ void surfaceTerms(const SurfaceInputs& in, const SurfaceOutputs& out, VectorKern
 }  // namespace detail
 
 JointSums sumJointSystem(const JointInputs& in, const Pose2& pose, double c, const JointLimits& limits,
-                         VectorKernels kernels) {
-  return wide(kernels) ? avx2::sums::sumJointSystem(in, pose, c, limits)
-                       : baseline::sums::sumJointSystem(in, pose, c, limits);
+                         VectorKernels kernels, JointTerms terms) {
+  if (terms == JointTerms::Translation)
+    return wide(kernels) ? avx2::sums::sumJointSystem<false>(in, pose, c, limits)
+                         : baseline::sums::sumJointSystem<false>(in, pose, c, limits);
+  return wide(kernels) ? avx2::sums::sumJointSystem<true>(in, pose, c, limits)
+                       : baseline::sums::sumJointSystem<true>(in, pose, c, limits);
 }
 
 SlopeFitSums sumSlopeFit(const SlopeFitInputs& in, double c, VectorKernels kernels) {
