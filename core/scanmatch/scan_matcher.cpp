@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <numbers>
 
@@ -20,8 +19,6 @@ constexpr double kMinDeterminant = 1e-3;
 constexpr double kMinCurvature = 1e-4;
 /// §10: PSM-C fails below this total weight.
 constexpr double kMinWeightSum = 1e-2;
-
-using ArrayMapF = Eigen::Map<const Eigen::ArrayXf>;
 
 /// Weighted (or plain) 2D rigid alignment q ≈ R(θ)p + t of point pairs (Lu & Milios style, §10).
 struct Alignment {

@@ -60,7 +60,6 @@ class ScanMatcher {
   /// The vector kernels of the inner loops: the widest the processor has unless set (every
   /// set gives the same bits; tests and benchmarks compare them).
   void useKernels(VectorKernels kernels) { kernels_ = kernels; }
-  VectorKernels kernels() const { return kernels_; }
 
  private:
   struct TranslationStep {

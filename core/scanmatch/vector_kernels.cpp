@@ -24,6 +24,7 @@ using detail::SurfaceOutputs;
 // baseline rounds twice.
 namespace baseline {
 #define POLARSLAM_VECTOR_BYTES 16
+#include "scanmatch/vector_lanes.inc"
 namespace projection {
 #include "scanmatch/projection_lanes.inc"
 }
@@ -41,6 +42,7 @@ namespace preparation {
 #pragma GCC target("avx2")
 namespace avx2 {
 #define POLARSLAM_VECTOR_BYTES 32
+#include "scanmatch/vector_lanes.inc"
 namespace projection {
 #include "scanmatch/projection_lanes.inc"
 }
