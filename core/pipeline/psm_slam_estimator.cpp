@@ -152,7 +152,7 @@ nlohmann::json psmSlamReportJson(const PsmSlam& slam, const PoseGraphOptimizatio
           {"candidate_matches", s.candidate_matches},
           {"loop_closures", s.loop_closures},
           {"map_candidate_matches", s.map_candidate_matches}, {"map_loop_closures", s.map_loop_closures},
-          {"loop_failed_matches", s.loop_failed_matches}, {"loop_poor_matches", s.loop_poor_matches}, {"loop_ambiguous", s.loop_ambiguous}, {"loop_gate_rejections", s.loop_gate_rejections}, {"loop_unconfirmed", s.loop_unconfirmed}, {"loop_refuted", s.loop_refuted}, {"loop_unverified", s.loop_unverified},
+          {"loop_failed_matches", s.loop_failed_matches}, {"loop_poor_matches", s.loop_poor_matches}, {"loop_ambiguous", s.loop_ambiguous}, {"loop_gate_rejections", s.loop_gate_rejections}, {"loop_unconfirmed", s.loop_unconfirmed}, {"loop_refuted", s.loop_refuted}, {"loop_unverified", s.loop_unverified}, {"loop_unfiltered_refuted", s.loop_unfiltered_refuted},
           {"optimizations", s.optimizations},
           {"optimization_seconds", s.optimization_seconds},
           {"rejected_loop_edges", s.rejected_loop_edges},

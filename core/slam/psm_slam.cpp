@@ -68,7 +68,8 @@ void PsmSlam::continueMap(const PoseGraph& graph, const std::vector<LaserScan>& 
     if (graph.nodes()[i].id != id)
       throw std::invalid_argument("the map's graph nodes are not numbered 0.." + std::to_string(references.size() - 1));
     std::optional<PreparedScan> prepared = prepareMatchableScan(references[i], params_.psm);
-    keyframes_.push_back({id, references[i].utime, references[i].laser_pose, prepared ? std::move(*prepared) : PreparedScan{}});
+    keyframes_.push_back(
+        {id, references[i].utime, references[i].laser_pose, prepared ? std::move(*prepared) : PreparedScan{}, references[i]});
   }
   graph_ = graph;
   for (const auto& [id, cov] : node_covariances) left_filter_cov_[id] = cov;
@@ -408,7 +409,7 @@ bool PsmSlam::selectReference(const LaserScan& scan, PreparedScan& prepared, con
       if (filter_.update(c.id, o->z, o->R, params_.chi2_gate).accepted) accepted.push_back(*o);
       continue;
     }
-    if (applyLoopClosure(c, *o, prepared, scan.laser_pose)) {
+    if (applyLoopClosure(c, *o, prepared, scan)) {
       accepted.push_back(*o);
       loop = true;
       if (c.id < map_keyframes_) ++stats_.map_loop_closures;
@@ -498,7 +499,27 @@ PsmSlam::Verification PsmSlam::verifyWithNeighbours(int64_t closure, const Pose2
   return agreed ? Verification::Agreed : Verification::NoEvidence;
 }
 
-bool PsmSlam::applyLoopClosure(const Candidate& c, const Observation& o, const PreparedScan& scan, const Pose2& mount) {
+bool PsmSlam::refutedWithoutMedianFilter(const Candidate& c, const Observation& o, const LaserScan& raw) {
+  const Keyframe& reference = keyframe(c.id);
+  if (!params_.loop_check_unfiltered || !params_.psm.median_filter || reference.raw.ranges.empty()) return false;
+  PsmParams unfiltered = params_.psm;
+  unfiltered.median_filter = false;
+  std::optional<PreparedScan> reference_scan = prepareMatchableScan(reference.raw, unfiltered);
+  std::optional<PreparedScan> scan = prepareMatchableScan(raw, unfiltered);
+  if (!reference_scan || !scan) return false;
+  const Keyframe unfiltered_reference{reference.id, reference.utime, reference.laser_mount, std::move(*reference_scan), {}};
+  const std::optional<Observation> u = matchKeyframe(unfiltered_reference, *scan, raw.laser_pose, c.prediction, true, false);
+  if (!u || !goodMatch(*u, true) || u->ambiguous) return false;
+  const Pose2 miss = between(o.z, u->z);
+  return miss.translation().norm() > params_.loop_verify_translation || std::abs(miss.theta) > params_.loop_verify_rotation;
+}
+
+bool PsmSlam::applyLoopClosure(const Candidate& c, const Observation& o, const PreparedScan& scan, const LaserScan& raw) {
+  const Pose2 mount = raw.laser_pose;
+  if (refutedWithoutMedianFilter(c, o, raw)) {
+    ++stats_.loop_unfiltered_refuted;
+    return false;
+  }
   double gate = params_.loop_chi2_gate;
   const double prior_sigma = largestPositionSigma(c.prediction);
   if (prior_sigma > params_.loop_confirm_sigma) {
@@ -558,7 +579,7 @@ void PsmSlam::addKeyframe(const LaserScan& scan, PreparedScan prepared, const st
     if (!link || o.keyframe != previous) addGraphEdge(o.keyframe, id, o.z, o.R, PoseGraphEdgeKind::Match);
   if (link && previous >= 0)
     addGraphEdge(previous, id, link->mean, link->cov + covarianceFloor(1e-3, 1e-3), PoseGraphEdgeKind::Odometry);
-  keyframes_.push_back({id, scan.utime, scan.laser_pose, std::move(prepared)});
+  keyframes_.push_back({id, scan.utime, scan.laser_pose, std::move(prepared), scan});
   ++stats_.keyframes;
   marginaliseOldKeyframes();
 }

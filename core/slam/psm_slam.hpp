@@ -114,6 +114,7 @@ struct PsmSlamStats {
   size_t loop_unconfirmed = 0;     ///< ... good, but a wide prior and no second closure agreeing (yet)
   size_t loop_refuted = 0;         ///< ... good, but a neighbouring reference scan matched elsewhere
   size_t loop_unverified = 0;      ///< ... good, but no neighbour matched and the prior is wider than a loop search
+  size_t loop_unfiltered_refuted = 0;  ///< ... good, but the scans without the median filter fit elsewhere
   size_t optimizations = 0;
   size_t rejected_loop_edges = 0;  ///< loop and refinement edges the optimiser found inconsistent
   double optimization_seconds = 0.0;
@@ -198,6 +199,7 @@ class PsmSlam {
     int64_t utime = 0;
     Pose2 laser_mount;
     PreparedScan scan;
+    LaserScan raw;  ///< as it came, for the unfiltered check of loop closures
   };
   /// A match of the current scan with one reference scan, as a robot-frame observation.
   struct Observation {
@@ -253,7 +255,8 @@ class PsmSlam {
   /// Loop-closure match with an old reference: gated, and when the prior is too wide for the gate
   /// to tell look-alike places apart, checked against the closure's neighbouring reference scans
   /// and confirmed by a second closure. True if applied.
-  bool applyLoopClosure(const Candidate& c, const Observation& o, const PreparedScan& scan, const Pose2& mount);
+  bool applyLoopClosure(const Candidate& c, const Observation& o, const PreparedScan& scan, const LaserScan& raw);
+  bool refutedWithoutMedianFilter(const Candidate& c, const Observation& o, const LaserScan& raw);
   enum class Verification { Agreed, Refuted, NoEvidence };
   /// The scan matched against the old reference scans that neighbour `closure` (taken in the same
   /// pass, near where the closure, robot pose `closure_z` in its frame, puts the robot), each

@@ -110,6 +110,8 @@ void describeLoops(ParameterTable& t, PsmSlamParams& p) {
   t.angle("loop_verify_rotation_deg", p.loop_verify_rotation, 0.0, 180.0, "the same for heading");
   t.number("loop_unverified_max_extent", p.loop_unverified_max_extent, 0.0, 1000.0,
            "m: a closure no neighbour verifies needs a prior this narrow (its 3σ)");
+  t.boolean("loop_check_unfiltered", p.loop_check_unfiltered,
+            "match each closure again without the median filter: landing elsewhere refutes it");
   t.angle("loop_search_window_deg", p.loop_search_window, 0.5, 180.0, "matcher orientation window for loops");
 }
 

@@ -314,7 +314,7 @@ void runPsmOnly(const Options& o, const std::string& world_path) {
   std::printf("%6s %8s %7s %7s | %6s %8s %6s %6s %6s %6s | %6s %6s %6s\n", "seed", "seconds", "ATE", "max", "loops",
               "ambiguous", "gated", "unconf", "refute", "disown", "edges", "wrong", "x real");
   std::vector<double> ate, max_error, speed;
-  size_t over_goal = 0, accepted = 0, ambiguous = 0, gated = 0, unconfirmed = 0, refuted = 0, unverified = 0, disowned = 0, wrong_active = 0,
+  size_t over_goal = 0, accepted = 0, ambiguous = 0, gated = 0, unconfirmed = 0, refuted = 0, unfiltered_refuted = 0, unverified = 0, disowned = 0, wrong_active = 0,
          runs_without_loop = 0;
   for (int k = 0; k < o.seeds; ++k) {
     const uint64_t seed = o.first_seed + static_cast<uint64_t>(k);
@@ -340,6 +340,7 @@ void runPsmOnly(const Options& o, const std::string& world_path) {
     gated += s.loop_gate_rejections;
     unconfirmed += s.loop_unconfirmed;
     refuted += s.loop_refuted;
+    unfiltered_refuted += s.loop_unfiltered_refuted;
     unverified += s.loop_unverified;
     disowned += s.rejected_loop_edges;
     wrong_active += edges.wrong_active;
@@ -366,6 +367,8 @@ void runPsmOnly(const Options& o, const std::string& world_path) {
   std::printf("  %-48s %10.1f   no goal\n", "... refused by the chi2 gate", static_cast<double>(gated) / n);
   std::printf("  %-48s %10.1f   no goal\n", "... waiting for a second closure", static_cast<double>(unconfirmed) / n);
   std::printf("  %-48s %10.1f   no goal\n", "... refuted by a neighbouring reference scan", static_cast<double>(refuted) / n);
+  std::printf("  %-48s %10.1f   no goal\n", "... refuted by the scans without the median filter",
+              static_cast<double>(unfiltered_refuted) / n);
   std::printf("  %-48s %10.1f   no goal\n", "... unverified in a prior wider than the search", static_cast<double>(unverified) / n);
   std::printf("  %-48s %10.1f   no goal\n", "... (or refinement edges) disowned by the optimiser", static_cast<double>(disowned) / n);
   std::printf("  %-48s %10.1f   goal >= 1 (real time)\n", "speed (x real time, mean)", mean(speed));
