@@ -511,7 +511,14 @@ bool PsmSlam::refutedWithoutMedianFilter(const Candidate& c, const Observation& 
   const std::optional<Observation> u = matchKeyframe(unfiltered_reference, *scan, raw.laser_pose, c.prediction, true, false);
   if (!u || !goodMatch(*u, true) || u->ambiguous) return false;
   const Pose2 miss = between(o.z, u->z);
-  return miss.translation().norm() > params_.loop_verify_translation || std::abs(miss.theta) > params_.loop_verify_rotation;
+  if (miss.translation().norm() <= params_.loop_verify_translation && std::abs(miss.theta) <= params_.loop_verify_rotation)
+    return false;
+  // Along a featureless corridor the raw match may just stay where the prior put it: only a
+  // markedly better fit of the raw ranges than the closure's pose gives refutes it.
+  MatchResult at_closure;
+  at_closure.pose = laserPoseInReferenceLaser(Pose2(), o.z, reference.laser_mount, raw.laser_pose);
+  matcher_.estimateCovariance(unfiltered_reference.scan, *scan, at_closure);
+  return at_closure.error_index > params_.loop_unfiltered_fit_ratio * u->error_index;
 }
 
 bool PsmSlam::applyLoopClosure(const Candidate& c, const Observation& o, const PreparedScan& scan, const LaserScan& raw) {

@@ -111,7 +111,9 @@ void describeLoops(ParameterTable& t, PsmSlamParams& p) {
   t.number("loop_unverified_max_extent", p.loop_unverified_max_extent, 0.0, 1000.0,
            "m: a closure no neighbour verifies needs a prior this narrow (its 3σ)");
   t.boolean("loop_check_unfiltered", p.loop_check_unfiltered,
-            "match each closure again without the median filter: landing elsewhere refutes it");
+            "match each closure again without the median filter: landing elsewhere refutes it ...");
+  t.number("loop_unfiltered_fit_ratio", p.loop_unfiltered_fit_ratio, 1.0, 1000.0,
+           "... where the raw ranges fit that pose this much better than the closure's");
   t.angle("loop_search_window_deg", p.loop_search_window, 0.5, 180.0, "matcher orientation window for loops");
 }
 

@@ -247,11 +247,14 @@ struct PsmSlamParams {
   double loop_verify_rotation = deg2rad(3.0);
   double loop_unverified_max_extent = 3.0;  ///< m
   /// Every loop closure is matched again from its prior with both scans' raw ranges, without the
-  /// median filter (§4.1); a good, unambiguous match that lands loop_verify_translation /
-  /// _rotation from the closure refutes it. Thin things (door jambs, mouldings 1-2 readings wide)
-  /// are filtered away in one view and kept in the other, and the rest can then fit best 0.3 m
-  /// along a corridor (core/scanmatch/README.md). Off by itself when the median filter is.
+  /// median filter (§4.1). A good, unambiguous match that lands loop_verify_translation /
+  /// _rotation from the closure refutes it when the raw ranges fit it markedly better: the
+  /// closure's pose has an error index above loop_unfiltered_fit_ratio times the raw match's.
+  /// Thin things (door jambs, mouldings 1-2 readings wide) are filtered away in one view and kept
+  /// in the other, and the rest can then fit best 0.3 m along a corridor (core/scanmatch/README.md).
+  /// Off by itself when the median filter is.
   bool loop_check_unfiltered = true;
+  double loop_unfiltered_fit_ratio = 1.1;
   /// Orientation window of the matcher's first orientation step for loop candidates.
   double loop_search_window = deg2rad(45.0);
 
