@@ -46,13 +46,19 @@ std::optional<RobotFrameMatch> matchInRobotFrame(ScanMatcher& matcher, const Pre
   return match;
 }
 
+double errorIndexAt(ScanMatcher& matcher, const PreparedScan& reference, const Pose2& reference_mount,
+                    const PreparedScan& scan, const Pose2& mount, const Pose2& z) {
+  MatchResult at;
+  at.pose = laserPoseInReferenceLaser(Pose2(), z, reference_mount, mount);
+  matcher.estimateCovariance(reference, scan, at);
+  return at.error_index;
+}
+
 bool predictionMisfits(ScanMatcher& matcher, const PreparedScan& reference, const Pose2& reference_mount,
                        const PreparedScan& scan, const Pose2& mount, const Pose2& predicted, double match_error_index,
                        const PsmSlamParams& params) {
-  MatchResult at;
-  at.pose = laserPoseInReferenceLaser(Pose2(), predicted, reference_mount, mount);
-  matcher.estimateCovariance(reference, scan, at);
-  return at.error_index > params.odometry_fault_fit_ratio * match_error_index;
+  return errorIndexAt(matcher, reference, reference_mount, scan, mount, predicted) >
+         params.odometry_fault_fit_ratio * match_error_index;
 }
 
 }  // namespace polarslam

@@ -36,6 +36,11 @@ std::optional<RobotFrameMatch> matchInRobotFrame(ScanMatcher& matcher, const Pre
                                                  const Pose2& mount, const Pose2& guess, const PsmSlamParams& params,
                                                  bool wide);
 
+/// Error index of `scan` fitted to `reference` at robot pose `z` (in the reference's robot frame),
+/// without iterating: the mean |range residual| a match ending there would report.
+double errorIndexAt(ScanMatcher& matcher, const PreparedScan& reference, const Pose2& reference_mount,
+                    const PreparedScan& scan, const Pose2& mount, const Pose2& z);
+
 /// Whether the predicted robot pose (`predicted`, in the reference's robot frame) fits `scan` to
 /// `reference` markedly worse than a match of error index `match_error_index` does: its error
 /// index (mean |range residual|, as a match ending there would report it) is more than

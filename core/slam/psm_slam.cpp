@@ -466,6 +466,11 @@ bool PsmSlam::confirmedByHypothesis(const Pose2& robot, const Pose2& map_pose, d
   return false;
 }
 
+bool PsmSlam::beyondVerifyTolerance(const Pose2& a, const Pose2& b) const {
+  const Pose2 miss = between(a, b);
+  return miss.translation().norm() > params_.loop_verify_translation || std::abs(miss.theta) > params_.loop_verify_rotation;
+}
+
 PsmSlam::Verification PsmSlam::verifyWithNeighbours(int64_t closure, const Pose2& closure_z, const PreparedScan& scan,
                                                     const Pose2& mount) {
   // Reference scans of the same pass as the closure's (ids within loop_min_keyframe_gap): their
@@ -491,9 +496,7 @@ PsmSlam::Verification PsmSlam::verifyWithNeighbours(int64_t closure, const Pose2
     const auto& [id, expected] = neighbour;
     const std::optional<Observation> o = matchKeyframe(keyframe(id), scan, mount, {expected, Mat3::Zero()}, true, false);
     if (!o || !goodMatch(*o, true)) continue;
-    const Pose2 miss = between(expected, o->z);
-    if (miss.translation().norm() > params_.loop_verify_translation || std::abs(miss.theta) > params_.loop_verify_rotation)
-      return Verification::Refuted;
+    if (beyondVerifyTolerance(expected, o->z)) return Verification::Refuted;
     agreed = true;
   }
   return agreed ? Verification::Agreed : Verification::NoEvidence;
@@ -510,15 +513,11 @@ bool PsmSlam::refutedWithoutMedianFilter(const Candidate& c, const Observation& 
   const Keyframe unfiltered_reference{reference.id, reference.utime, reference.laser_mount, std::move(*reference_scan), {}};
   const std::optional<Observation> u = matchKeyframe(unfiltered_reference, *scan, raw.laser_pose, c.prediction, true, false);
   if (!u || !goodMatch(*u, true) || u->ambiguous) return false;
-  const Pose2 miss = between(o.z, u->z);
-  if (miss.translation().norm() <= params_.loop_verify_translation && std::abs(miss.theta) <= params_.loop_verify_rotation)
-    return false;
+  if (!beyondVerifyTolerance(o.z, u->z)) return false;
   // Along a featureless corridor the raw match may just stay where the prior put it: only a
   // markedly better fit of the raw ranges than the closure's pose gives refutes it.
-  MatchResult at_closure;
-  at_closure.pose = laserPoseInReferenceLaser(Pose2(), o.z, reference.laser_mount, raw.laser_pose);
-  matcher_.estimateCovariance(unfiltered_reference.scan, *scan, at_closure);
-  return at_closure.error_index > params_.loop_unfiltered_fit_ratio * u->error_index;
+  return errorIndexAt(matcher_, unfiltered_reference.scan, reference.laser_mount, *scan, raw.laser_pose, o.z) >
+         params_.loop_unfiltered_fit_ratio * u->error_index;
 }
 
 bool PsmSlam::applyLoopClosure(const Candidate& c, const Observation& o, const PreparedScan& scan, const LaserScan& raw) {

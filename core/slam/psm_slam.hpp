@@ -256,7 +256,11 @@ class PsmSlam {
   /// to tell look-alike places apart, checked against the closure's neighbouring reference scans
   /// and confirmed by a second closure. True if applied.
   bool applyLoopClosure(const Candidate& c, const Observation& o, const PreparedScan& scan, const LaserScan& raw);
+  /// loop_check_unfiltered: the closure matched again with both scans' raw ranges lands elsewhere
+  /// and fits there markedly better.
   bool refutedWithoutMedianFilter(const Candidate& c, const Observation& o, const LaserScan& raw);
+  /// Two robot poses farther apart than loop_verify_translation / _rotation.
+  bool beyondVerifyTolerance(const Pose2& a, const Pose2& b) const;
   enum class Verification { Agreed, Refuted, NoEvidence };
   /// The scan matched against the old reference scans that neighbour `closure` (taken in the same
   /// pass, near where the closure, robot pose `closure_z` in its frame, puts the robot), each

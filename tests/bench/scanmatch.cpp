@@ -19,6 +19,7 @@
 #include <functional>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -530,10 +531,10 @@ void mitExperiments(const Options& o) {
     struct Tally {
       int ok = 0, total = 0;
       std::array<int, 3> failures{};  ///< by Failure
-      void add(bool success, Failure kind) {
+      void add(std::optional<Failure> failure) {
         ++total;
-        if (success) ++ok;
-        else ++failures[static_cast<size_t>(kind)];
+        if (failure) ++failures[static_cast<size_t>(*failure)];
+        else ++ok;
       }
       double percent(int count) const { return 100.0 * count / std::max(1, total); }
       double successPercent() const { return percent(ok); }
@@ -556,10 +557,10 @@ void mitExperiments(const Options& o) {
           for (int g = 0; g < 5; ++g) {
             const Pose2 guess = p.truth * fixtures::randomError(n, limits[l][0], limits[l][1]);
             const MatchResult result = mm.match(p.ref, p.cur, guess, m.method);
-            const bool ok = success(result, p.truth);
-            const Failure kind = ok ? Failure::Refused : failureKind(result, p);
-            all[l].add(ok, kind);
-            if (p.determined) determined[l].add(ok, kind);
+            const std::optional<Failure> failure =
+                success(result, p.truth) ? std::nullopt : std::optional<Failure>(failureKind(result, p));
+            all[l].add(failure);
+            if (p.determined) determined[l].add(failure);
           }
         }
       }
