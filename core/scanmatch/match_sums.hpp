@@ -12,13 +12,14 @@
 namespace polarslam {
 
 /// Per reference bearing: the projected range r'' and its tag, the reference range and flags,
-/// and the reference's surface terms (PreparedScan::SurfaceTerms).
+/// and the reference's surface terms (PreparedScan::SurfaceTerms; beta_variance is read only
+/// for JointTerms::SlopeNoise and may be null otherwise).
 struct JointInputs {
   const float* projected;
   const float* measured;
   const uint8_t* tag;
   const uint8_t* flags;
-  const double *rho, *cos_beta, *normal_x, *normal_y, *rho_cos_beta;
+  const double *rho, *cos_beta, *normal_x, *normal_y, *rho_cos_beta, *beta_variance;
   size_t size;
 };
 
@@ -34,11 +35,15 @@ struct JointSums {
   double sum_w = 0, sum_we2 = 0;
   double sum_abs_error = 0;  ///< Σ|e| over the `in_index` samples within max_error/2
   int used = 0, in_index = 0;
+  /// Σ w·var(β)·(uuᵀ − hhᵀ), u = ∂h/∂β = (h2, −h1, u3), over the same samples as HᵀWH: what the
+  /// noise of the reference's slopes adds to it per unit range variance, to second order. Its
+  /// (2,2) entry is −s11.
+  double s11 = 0, s12 = 0, s13 = 0, s23 = 0, s33 = 0;
 };
 
-/// Which part of the joint system to sum: all of it, or only the translation's (a13, a23, a33
-/// and g3 left at 0; the rest the same bits).
-enum class JointTerms { All, Translation };
+/// Which part of the joint system to sum: all of it; only the translation's (a13, a23, a33
+/// and g3 left at 0; the rest the same bits); or only the slope noise's s11..s33 (with `used`).
+enum class JointTerms { All, Translation, SlopeNoise };
 
 /// The sums at `pose` (the current laser in the reference laser frame) with weights
 /// w = c/(c + e²).

@@ -137,7 +137,7 @@ struct PsmParams {
   /// Takes out of the WLS information what the noise of the reference's fitted slopes adds to it
   /// (an errors-in-variables effect: noisy normals claim information along a corridor that the
   /// ranges do not carry). See core/scanmatch/README.md, "Taking the slope noise's information out".
-  bool slope_noise_correction = false;
+  bool slope_noise_correction = true;
   /// Added to the WLS covariance: errors the residuals cannot show (the straight-line
   /// interpolation, the bearing grid).
   double wls_floor_xy = 0.0005, wls_floor_theta = deg2rad(0.02);

@@ -655,8 +655,11 @@ void ScanMatcher::estimateCovariance(const PreparedScan& ref, const PreparedScan
 
 void ScanMatcher::fillCovariance(const PreparedScan& ref, const JointSystem& system, MatchResult& result) const {
   result.error_index = system.error_index;
-  result.cov = params_.covariance == CovarianceModel::Wls ? covarianceFrom(system)
-                                                           : heuristicCovariance(ref, system.error_index);
+  if (params_.covariance != CovarianceModel::Wls) {
+    result.cov = heuristicCovariance(ref, system.error_index);
+    return;
+  }
+  result.cov = covarianceFrom(system, params_.slope_noise_correction ? slopeNoise(ref, system) : Mat3::Zero());
 }
 
 Mat3 ScanMatcher::heuristicCovariance(const PreparedScan& ref, double error_index) const {
@@ -678,14 +681,19 @@ Mat3 ScanMatcher::heuristicCovariance(const PreparedScan& ref, double error_inde
   return cov;
 }
 
+JointSums ScanMatcher::jointSums(const PreparedScan& ref, const Pose2& pose, double c, JointTerms terms) const {
+  const PreparedScan::SurfaceTerms& surface = ref.surface;
+  const JointInputs inputs{projection_.range.data(), ref.range.data(),         projection_.tag.data(),
+                           ref.flags.data(),         surface.rho.data(),       surface.cos_beta.data(),
+                           surface.normal_x.data(),  surface.normal_y.data(),  surface.rho_cos_beta.data(),
+                           surface.beta_variance.data(), ref.size()};
+  const JointLimits limits{params_.min_range, params_.max_range, params_.max_error, params_.max_slope};
+  return sumJointSystem(inputs, pose, c, limits, kernels_, terms);
+}
+
 ScanMatcher::JointSystem ScanMatcher::jointSystem(const PreparedScan& ref, const Pose2& pose, double c,
                                                   JointTerms terms) const {
-  const PreparedScan::SurfaceTerms& surface = ref.surface;
-  const JointInputs inputs{projection_.range.data(), ref.range.data(), projection_.tag.data(), ref.flags.data(),
-                           surface.rho.data(), surface.cos_beta.data(), surface.normal_x.data(),
-                           surface.normal_y.data(), surface.rho_cos_beta.data(), ref.size()};
-  const JointLimits limits{params_.min_range, params_.max_range, params_.max_error, params_.max_slope};
-  const JointSums sums = sumJointSystem(inputs, pose, c, limits, kernels_, terms);
+  const JointSums sums = jointSums(ref, pose, c, terms);
   JointSystem system;
   system.information << sums.a11, sums.a12, sums.a13, sums.a12, sums.a22, sums.a23, sums.a13, sums.a23, sums.a33;
   system.gradient << sums.g1, sums.g2, sums.g3;
@@ -693,31 +701,19 @@ ScanMatcher::JointSystem ScanMatcher::jointSystem(const PreparedScan& ref, const
   system.sum_we2 = sums.sum_we2;
   system.used = sums.used;
   system.error_index = sums.in_index > 0 ? sums.sum_abs_error / sums.in_index : params_.max_error;
-  if (params_.slope_noise_correction && terms == JointTerms::All) system.slope_noise = slopeNoise(ref, pose, c);
+  system.pose = pose;
+  system.c = c;
   return system;
 }
 
-Mat3 ScanMatcher::slopeNoise(const PreparedScan& ref, const Pose2& pose, double c) const {
-  const PreparedScan::SurfaceTerms& surface = ref.surface;
-  Mat3 spurious = Mat3::Zero();
-  for (size_t j = 0; j < ref.size(); ++j) {
-    if (ref.flags[j] | projection_.tag[j]) continue;
-    const double r = projection_.range[j];
-    if (!(r > params_.min_range && r < params_.max_range)) continue;
-    const double e = ref.range[j] - r;
-    if (std::abs(e) >= params_.max_error || !(std::abs(surface.rho[j]) <= params_.max_slope)) continue;
-    const double h1 = surface.normal_x[j], h2 = surface.normal_y[j];
-    const double h3 = pose.y * h1 - pose.x * h2 - surface.rho_cos_beta[j] * r;
-    const double w = c / (c + e * e);
-    // The normal (h1, h2) = (cos(φ−β), sin(φ−β)) turns with β; h3 with it.
-    const Vec3 u(h2, -h1, pose.y * h2 + pose.x * h1 - surface.cos_beta[j] * r);
-    const Vec3 h(h1, h2, h3);
-    spurious += (w * surface.beta_variance[j]) * (u * u.transpose() - h * h.transpose());
-  }
+Mat3 ScanMatcher::slopeNoise(const PreparedScan& ref, const JointSystem& system) const {
+  const JointSums s = jointSums(ref, system.pose, system.c, JointTerms::SlopeNoise);
+  Mat3 spurious;
+  spurious << s.s11, s.s12, s.s13, s.s12, -s.s11, s.s23, s.s13, s.s23, s.s33;
   return spurious;
 }
 
-Mat3 ScanMatcher::covarianceFrom(const JointSystem& system) const {
+Mat3 ScanMatcher::covarianceFrom(const JointSystem& system, const Mat3& slope_noise) const {
   if (system.used < 4 || system.sum_w <= 3.0) {  // nothing to estimate from: no better than a wild guess
     Mat3 cov = Mat3::Zero();
     const double r2 = params_.max_range * params_.max_range;
@@ -731,7 +727,7 @@ Mat3 ScanMatcher::covarianceFrom(const JointSystem& system) const {
   const double free_variance = params_.max_range * params_.max_range / (params_.wls_inflation * sigma2);
   // A residual is a reference reading less an interpolation between two current ones, so
   // σ̂² ≈ 1.5·σ_r²; the slopes' noise is that of the reference's ranges.
-  const Mat3 information = system.information - (sigma2 / 1.5) * system.slope_noise;
+  const Mat3 information = system.information - (sigma2 / 1.5) * slope_noise;
   Mat3 cov = params_.wls_inflation * sigma2 * ObservableSpace(information).inverse(free_variance);
   cov(0, 0) += params_.wls_floor_xy * params_.wls_floor_xy;
   cov(1, 1) += params_.wls_floor_xy * params_.wls_floor_xy;

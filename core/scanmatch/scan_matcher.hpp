@@ -75,13 +75,14 @@ class ScanMatcher {
   /// Jacobian (§11.1), plus the sums the covariance and the error index need.
   struct JointSystem {
     Mat3 information = Mat3::Zero();
-    /// Σ w·var(β)/σ_r²·(uuᵀ − hhᵀ), u = ∂h/∂β: what slope noise adds to `information` per unit
-    /// range variance, to second order (accumulated only with slope_noise_correction).
-    Mat3 slope_noise = Mat3::Zero();
     Vec3 gradient = Vec3::Zero();
     double sum_w = 0.0, sum_we2 = 0.0;
     int used = 0;
     double error_index = 0.0;
+    /// Where the system was set up (the projection it was summed over) and its weighting
+    /// factor: the covariance's slope-noise term is summed there too, once, at the end.
+    Pose2 pose;
+    double c = 0.0;
   };
   struct CartesianStep {
     MatchStatus status = MatchStatus::Ok;
@@ -99,11 +100,15 @@ class ScanMatcher {
   double weightingFactor(int iteration, const PreparedScan& ref) const;
   double projectedErrorIndex(const PreparedScan& ref) const;
   TranslationStep solveTranslation(const PreparedScan& ref, const Pose2& pose, double c);
+  /// The sums over the current projection (projection_) at `pose`.
+  JointSums jointSums(const PreparedScan& ref, const Pose2& pose, double c, JointTerms terms) const;
   JointSystem jointSystem(const PreparedScan& ref, const Pose2& pose, double c,
                           JointTerms terms = JointTerms::All) const;
-  /// JointSystem::slope_noise at `pose` (slope_noise_correction).
-  Mat3 slopeNoise(const PreparedScan& ref, const Pose2& pose, double c) const;
-  Mat3 covarianceFrom(const JointSystem& system) const;
+  /// JointSums' s11..s33 as a matrix at the system's pose: what slope noise adds to its
+  /// information per unit range variance (slope_noise_correction). Reads the projection the
+  /// system was summed over.
+  Mat3 slopeNoise(const PreparedScan& ref, const JointSystem& system) const;
+  Mat3 covarianceFrom(const JointSystem& system, const Mat3& slope_noise) const;
   /// error_index and cov of `result` from the system at its final pose, by the configured model.
   void fillCovariance(const PreparedScan& ref, const JointSystem& system, MatchResult& result) const;
   OrientationStep searchOrientation(const PreparedScan& ref, double window, double c);

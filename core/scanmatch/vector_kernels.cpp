@@ -104,11 +104,17 @@ void surfaceTerms(const SurfaceInputs& in, const SurfaceOutputs& out, VectorKern
 
 JointSums sumJointSystem(const JointInputs& in, const Pose2& pose, double c, const JointLimits& limits,
                          VectorKernels kernels, JointTerms terms) {
-  if (terms == JointTerms::Translation)
-    return wide(kernels) ? avx2::sums::sumJointSystem<false>(in, pose, c, limits)
-                         : baseline::sums::sumJointSystem<false>(in, pose, c, limits);
-  return wide(kernels) ? avx2::sums::sumJointSystem<true>(in, pose, c, limits)
-                       : baseline::sums::sumJointSystem<true>(in, pose, c, limits);
+  switch (terms) {
+    case JointTerms::Translation:
+      return wide(kernels) ? avx2::sums::sumJointSystem<JointTerms::Translation>(in, pose, c, limits)
+                           : baseline::sums::sumJointSystem<JointTerms::Translation>(in, pose, c, limits);
+    case JointTerms::SlopeNoise:
+      return wide(kernels) ? avx2::sums::sumJointSystem<JointTerms::SlopeNoise>(in, pose, c, limits)
+                           : baseline::sums::sumJointSystem<JointTerms::SlopeNoise>(in, pose, c, limits);
+    case JointTerms::All: break;
+  }
+  return wide(kernels) ? avx2::sums::sumJointSystem<JointTerms::All>(in, pose, c, limits)
+                       : baseline::sums::sumJointSystem<JointTerms::All>(in, pose, c, limits);
 }
 
 SlopeFitSums sumSlopeFit(const SlopeFitInputs& in, double c, VectorKernels kernels) {

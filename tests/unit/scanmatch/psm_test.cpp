@@ -367,22 +367,24 @@ TEST(Covariance, SlopesOverCentimetresAreConsistentInCorridorsNearTheirWalls) {
 }
 
 TEST(Covariance, WithoutTheSlopeNoisesInformationCorridorsAreConsistentAndRoomsUnchanged) {
-  // slope_noise_correction takes E[ĥĥᵀ] − hhᵀ = var(β)(uuᵀ − hhᵀ) out of the information
-  // instead (core/scanmatch/README.md); the matches themselves are the default's.
-  PsmParams params;
-  params.slope_noise_correction = true;
+  // slope_noise_correction (the default) takes E[ĥĥᵀ] − hhᵀ = var(β)(uuᵀ − hhᵀ) out of the
+  // information (core/scanmatch/README.md); the matches themselves are those without it.
+  const PsmParams params;
+  ASSERT_TRUE(params.slope_noise_correction);
   auto corridor = corridorPairs(500, 31, 0.1, deg2rad(5.0), 0.01, params);
   int used = 0;
   const double corridor_nees = printedMeanNees(corridor, params, "corridor (slope noise out)", used);
   EXPECT_GT(used, 490);
   EXPECT_GT(corridor_nees, 2.5);
   EXPECT_LT(corridor_nees, 3.5);
-  const PsmParams plain;
+  PsmParams with_slope_information;
+  with_slope_information.slope_noise_correction = false;
   int used_plain = 0;
-  EXPECT_GT(meanNees(corridor, plain, used_plain), 1.4 * corridor_nees) << "the default's tail along the corridor";
+  EXPECT_GT(meanNees(corridor, with_slope_information, used_plain), 1.4 * corridor_nees)
+      << "the tail along the corridor without the correction";
   auto rooms = officePairs(200, 32, 0.1, deg2rad(5.0), 0.01, params);
   const double room_nees = printedMeanNees(rooms, params, "room (slope noise out)", used);
-  EXPECT_NEAR(room_nees, meanNees(rooms, plain, used_plain), 0.15);
+  EXPECT_NEAR(room_nees, meanNees(rooms, with_slope_information, used_plain), 0.15);
 }
 
 TEST(Covariance, HeuristicIsFarTooCautiousInRooms) {

@@ -124,6 +124,13 @@ JointSums plainSums(const JointInputs& in, const Pose2& pose, double c, const Jo
     s.sum_w += w;
     s.sum_we2 += w * en * en;
     ++s.used;
+    const double u1 = h2, u2 = -h1, u3 = pose.y * h2 + pose.x * h1 - in.cos_beta[j] * r;
+    const double k = w * in.beta_variance[j];
+    s.s11 += k * (u1 * u1 - h1 * h1);
+    s.s12 += k * (u1 * u2 - h1 * h2);
+    s.s13 += k * (u1 * u3 - h1 * h3);
+    s.s23 += k * (u2 * u3 - h2 * h3);
+    s.s33 += k * (u3 * u3 - h3 * h3);
   }
   return s;
 }
@@ -137,7 +144,7 @@ TEST(VectorKernels, JointSumsAreThoseOfAPlainLoopWhateverTheInputs) {
   for (size_t n : {0, 1, 3, 4, 5, 181, 182, 183, 361}) {
     std::vector<float> projected(n), measured(n);
     std::vector<uint8_t> tag(n), flags(n);
-    std::vector<double> rho(n), cos_beta(n), normal_x(n), normal_y(n), rho_cos_beta(n);
+    std::vector<double> rho(n), cos_beta(n), normal_x(n), normal_y(n), rho_cos_beta(n), beta_variance(n);
     for (size_t j = 0; j < n; ++j) {
       const double u = noise.uniform();
       measured[j] = static_cast<float>(noise.uniform(0.05, 12.0));
@@ -150,9 +157,11 @@ TEST(VectorKernels, JointSumsAreThoseOfAPlainLoopWhateverTheInputs) {
       normal_x[j] = (std::cos(bearing) + rho[j] * std::sin(bearing)) * cos_beta[j];
       normal_y[j] = (std::sin(bearing) - rho[j] * std::cos(bearing)) * cos_beta[j];
       rho_cos_beta[j] = rho[j] * cos_beta[j];
+      beta_variance[j] = std::isnan(rho[j]) ? nan : noise.uniform(0.0, 0.1);
     }
-    const JointInputs in{projected.data(), measured.data(), tag.data(), flags.data(), rho.data(), cos_beta.data(),
-                         normal_x.data(), normal_y.data(), rho_cos_beta.data(), n};
+    const JointInputs in{projected.data(),    measured.data(),      tag.data(),   flags.data(),
+                         rho.data(),          cos_beta.data(),      normal_x.data(), normal_y.data(),
+                         rho_cos_beta.data(), beta_variance.data(), n};
     const Pose2 pose{0.3, -0.2, 0.1};
     const JointSums plain = plainSums(in, pose, 0.01, limits);
     for (VectorKernels kernels : {VectorKernels::Baseline, VectorKernels::Avx2}) {
@@ -164,6 +173,14 @@ TEST(VectorKernels, JointSumsAreThoseOfAPlainLoopWhateverTheInputs) {
                                 {v.g3, plain.g3},   {v.sum_w, plain.sum_w}, {v.sum_we2, plain.sum_we2},
                                 {v.sum_abs_error, plain.sum_abs_error}};
       for (const auto& [got, want] : sums) {
+        ASSERT_TRUE(std::isfinite(got)) << n;
+        EXPECT_NEAR(got, want, 1e-12 * (1.0 + std::abs(want))) << n;
+      }
+      const JointSums slope = sumJointSystem(in, pose, 0.01, limits, kernels, JointTerms::SlopeNoise);
+      EXPECT_EQ(slope.used, plain.used) << n;
+      const double slope_sums[][2] = {{slope.s11, plain.s11}, {slope.s12, plain.s12}, {slope.s13, plain.s13},
+                                      {slope.s23, plain.s23}, {slope.s33, plain.s33}};
+      for (const auto& [got, want] : slope_sums) {
         ASSERT_TRUE(std::isfinite(got)) << n;
         EXPECT_NEAR(got, want, 1e-12 * (1.0 + std::abs(want))) << n;
       }

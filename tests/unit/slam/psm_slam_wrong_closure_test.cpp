@@ -99,18 +99,19 @@ TEST(PsmSlamWrongClosure, TrackingBelievesTheOdometryWhereTheScanFitsTwoPlaces) 
   }
 }
 
-// Office seed 8297 (of 8000-8299, never used for tuning): a return scan 1 m from the start
-// corridor's reference scan fitted it 0.37 m along the corridor. The median filter had removed a
+// Office seed 8159 (of 8000-8299, never used for tuning): a return scan 2 m from the start
+// corridor's reference scan fitted it 0.4 m along the corridor. The median filter had removed a
 // door jamb, 1-2 readings wide at that range, from one view and kept it in the other. Matched
 // again from the prior with the raw ranges, the pair lands where the robot is, which refutes the
-// closure (loop_check_unfiltered); without that check the wrong edge is in the graph.
+// closure (loop_check_unfiltered); without that check a wrong edge is in the graph. (Seed 8297
+// showed it until the WLS covariance lost the slope noise's information, slope_noise_correction.)
 TEST(PsmSlamWrongClosure, ClosuresHoldWithoutTheMedianFilter) {
   for (const bool check : {true, false}) {
     PsmSlamParams params;
     params.loop_check_unfiltered = check;
     PsmSlam slam(params);
     testing::PsmSlamSimSink sink(slam);
-    runPsmSlam("office.yaml", 8297, slam, sink);
+    runPsmSlam("office.yaml", 8159, slam, sink);
     ASSERT_FALSE(sink.truth.empty());
     const size_t wrong = testing::edgesOffTheTruth(slam.graph(), sink.truth, PoseGraphEdgeKind::Loop);
     if (check) {
