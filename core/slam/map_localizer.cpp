@@ -1,9 +1,9 @@
 #include "slam/map_localizer.hpp"
 
+#include "geometry/covariance.hpp"
 #include "slam/psm_match.hpp"
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
 #include <algorithm>
@@ -25,10 +25,6 @@ std::vector<T> evenlyThinned(const std::vector<T>& items, int count) {
   return kept;
 }
 
-/// Standard deviation of the position along its most uncertain direction.
-double positionSigma(const Mat3& cov) {
-  return std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(cov.topLeftCorner<2, 2>()).eigenvalues().maxCoeff()));
-}
 
 
 }  // namespace
@@ -517,7 +513,7 @@ MapLocalizationResult MapLocalizer::addScan(const LaserScan& scan) {
       const size_t failed = static_cast<size_t>(std::max(failures_in_a_row_, unmatched_near_map_)) - 1;
       lose();
       lost_since_ = online_.size() >= failed ? online_.size() - failed : 0;
-    } else if (tracked == Tracked::NewGround && positionSigma(cov_) > options_.max_off_map_sigma) {
+    } else if (tracked == Tracked::NewGround && largestPositionSigma(cov_) > options_.max_off_map_sigma) {
       ++stats_.off_map_timeouts;
       lose();  // the poses so far still hold what odometry knew; from here on they are re-placed
     }

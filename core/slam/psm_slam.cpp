@@ -1,8 +1,7 @@
 #include "slam/psm_slam.hpp"
 
+#include "geometry/covariance.hpp"
 #include "slam/psm_match.hpp"
-
-#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <cmath>
@@ -20,12 +19,6 @@ Mat3 inverseJacobian(const Pose2& p) {
   Mat3 J;
   J << -c, -s, inv.y, s, -c, -inv.x, 0.0, 0.0, -1.0;
   return J;
-}
-
-/// Standard deviation of a prediction's position along its most uncertain direction.
-double largestPositionSigma(const RelativePosePrediction& prediction) {
-  const Mat2 cov = prediction.cov.topLeftCorner<2, 2>();
-  return std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat2>(cov).eigenvalues().maxCoeff()));
 }
 
 /// The pose of b's keyframe seen from a's keyframe, from the same scan matched against both:
@@ -184,7 +177,7 @@ std::vector<Pose2> PsmSlam::loopGuesses(const RelativePosePrediction& prior, boo
   std::vector<Pose2> guesses{prior.mean};
   const double step = params_.loop_guess_spacing;
   const Mat2 cov = prior.cov.topLeftCorner<2, 2>();
-  const double sigma = largestPositionSigma(prior);
+  const double sigma = largestPositionSigma(prior.cov);
   const double k = params_.loop_candidate_sigmas;
   if (!wide || !(step > 0.0) || k * sigma < step) return guesses;
   // A prior wider than PSM's basin: start also from a grid over the k-σ ellipse, keeping the
@@ -527,7 +520,7 @@ bool PsmSlam::applyLoopClosure(const Candidate& c, const Observation& o, const P
     return false;
   }
   double gate = params_.loop_chi2_gate;
-  const double prior_sigma = largestPositionSigma(c.prediction);
+  const double prior_sigma = largestPositionSigma(c.prediction.cov);
   if (prior_sigma > params_.loop_confirm_sigma) {
     // A wide prior lets an aliased match (a look-alike corridor) through the χ² gate. Two
     // independent checks: the closure's neighbouring reference scans must not see the robot

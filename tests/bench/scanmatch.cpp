@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "eval/error_statistics.hpp"
+#include "geometry/covariance.hpp"
 #include "eval/relation_metric.hpp"
 #include "io/carmen.hpp"
 #include "plot/image.hpp"
@@ -507,8 +508,7 @@ void mitExperiments(const Options& o) {
       if (!psm.ok() || !icp.ok()) continue;
       const auto d = fixtures::poseError(psm.pose, icp.pose);
       if (d.translation > 0.02 || d.rotation > deg2rad(0.5)) continue;
-      const double largest_variance = psm.cov.topLeftCorner<2, 2>().selfadjointView<Eigen::Upper>().eigenvalues().maxCoeff();
-      const bool determined = 3.0 * std::sqrt(largest_variance) <= 0.05 && 3.0 * std::sqrt(psm.cov(2, 2)) <= deg2rad(1.0);
+      const bool determined = 3.0 * largestPositionSigma(psm.cov) <= 0.05 && 3.0 * std::sqrt(psm.cov(2, 2)) <= deg2rad(1.0);
       pairs.push_back({std::move(a), std::move(b), psm.pose, determined});
     }
     // A failure is one of three kinds: the matcher refused (a status other than ok); its answer
