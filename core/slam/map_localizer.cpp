@@ -25,8 +25,6 @@ std::vector<T> evenlyThinned(const std::vector<T>& items, int count) {
   return kept;
 }
 
-
-
 }  // namespace
 
 MapLocalizer::MapLocalizer(const std::vector<MapReference>& references, PsmSlamParams params)
